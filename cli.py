@@ -1,0 +1,70 @@
+"""``ibr`` command line: thin subcommands over the ``ibr`` and ``panorama`` libraries.
+
+Exit codes: 0 success, 1 runtime error (bad data, missing file, failed computation),
+2 usage error (bad arguments). Run ``ibr <command> --help`` for each command's options.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# (subcommand, module in commands/) in the order shown by --help.
+COMMANDS = [
+    ("samples", "samples"),
+    ("interpolate", "interpolate"),
+    ("warp", "warp"),
+    ("mesh", "mesh"),
+    ("bench", "bench"),
+    ("stereo", "stereo"),
+    ("distort", "distort"),
+    ("timewarp", "timewarp"),
+    ("cubemap", "cubemap"),
+    ("view", "view"),
+]
+
+
+def _available_commands():
+    for name, module in COMMANDS:
+        try:
+            yield name, importlib.import_module(f"commands.{module}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"commands.{module}":
+                raise
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="ibr",
+        description="Image-based rendering from RGB-D views: new views, stereo pairs and panoramas.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, module in _available_commands():
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        module.add_arguments(p)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
+        return int(exc.code or 0)
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        return int(args._run(args) or 0)
+    except KeyboardInterrupt:
+        print("ibr: interrupted", file=sys.stderr)
+        return 1
+    except (ValueError, TypeError, OSError, RuntimeError) as exc:
+        print(f"ibr {args.command}: error: {exc}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

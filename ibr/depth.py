@@ -1,0 +1,262 @@
+"""Depth encodings and their exact conversions to planar z.
+
+Inside the engine depth is **planar z**: the coordinate along the optical axis (camera +z) in
+scene units, float32, NaN where there is no depth. Every other encoding is converted at the edge
+by the functions here. Each ``z_from_*`` function returns NaN for invalid input (NaN, inf,
+zero or negative depth, values outside the encoding's range); :func:`valid_mask` gives the mask.
+
+Encodings (n, f = near and far plane distances, planar)
+-------------------------------------------------------
+range          r = z * |ray|, ``|ray| = sqrt(1 + ((u - cx)/fx)^2 + ((v - cy)/fy)^2)``
+disparity      d = B * fx / z - doffs  <=>  z = B * fx / (d + doffs)   (Middlebury, pixels)
+window z       w = f / (f - n) * (1 - n / z), in [0, 1] (OpenGL with glDepthRange(0, 1), D3D)
+               exact inverse z = n * f / (f - w * (f - n))   (DESIGN.md: seed 003's printed
+               inverse Z'(f - n)/f + n is wrong)
+fixed point    q = round(w * (2^bits - 1)), bits in {16, 24, 32}; seed 002 eq. 2 uses the scale
+               2^24 * w (see :func:`zprime_from_z`).
+reversed z     w_rev = 1 - w (finite far), or n / z (infinite far plane)
+
+Quantization step of a fixed-point buffer at depth z (one code step):
+``dz = z^2 * (f - n) / (n * f * (2^bits - 1))`` to first order; see :func:`zbuffer_step`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._validate import check_array, check_finite_scalar, check_positive
+
+__all__ = [
+    "disparity_from_z",
+    "fixed_from_z",
+    "range_from_z",
+    "sanitize_depth",
+    "valid_mask",
+    "window_from_z",
+    "reversed_from_z",
+    "z_from_disparity",
+    "z_from_fixed",
+    "z_from_range",
+    "z_from_reversed",
+    "z_from_window",
+    "z_from_zprime",
+    "zbuffer_step",
+    "zprime_from_z",
+    "ZPRIME_SCALE",
+]
+
+#: Scale of the seed 002 nonlinear depth z' (eq. 2): z' = 2^24 * w.
+ZPRIME_SCALE = float(2**24)
+
+
+def _near_far(near, far) -> tuple[float, float]:
+    n = check_positive("near", near)
+    f = check_positive("far", far, allow_inf=True)
+    if not f > n:
+        raise ValueError(f"far: expected far > near, got near={near!r}, far={far!r}")
+    return n, f
+
+
+def _float(name: str, a) -> np.ndarray:
+    return check_array(name, a, dtype_kind="fiub").astype(np.float64)
+
+
+def valid_mask(z) -> np.ndarray:
+    """Boolean mask of usable planar depth: finite and > 0."""
+    z = np.asarray(z)
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(z) & (z > 0)
+
+
+def sanitize_depth(z, *, near: float | None = None, far: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Planar depth as float32 with every invalid value set to NaN, plus the validity mask.
+
+    Invalid: NaN, +-inf, z <= 0, and (when given) z < near or z > far.
+
+    Returns
+    -------
+    z : float32 array, same shape
+    valid : bool array
+    """
+    z64 = _float("z", z)
+    valid = valid_mask(z64)
+    with np.errstate(invalid="ignore"):
+        if near is not None:
+            valid &= z64 >= check_positive("near", near)
+        if far is not None:
+            valid &= z64 <= check_positive("far", far, allow_inf=True)
+    out = np.where(valid, z64, np.nan).astype(np.float32)
+    return out, valid
+
+
+def _ray_norm(camera, shape) -> np.ndarray:
+    if tuple(shape[-2:]) != (camera.height, camera.width):
+        raise ValueError(
+            f"depth: shape {tuple(shape)} does not match camera size {camera.height}x{camera.width}"
+        )
+    return np.linalg.norm(camera.rays_cam(), axis=-1)
+
+
+def range_from_z(z, camera) -> np.ndarray:
+    """Range (Euclidean distance from the camera center along the pixel ray) from planar z.
+
+    ``z`` has shape (H, W) matching ``camera``. For a pixel at the principal point range = z;
+    at the corner of a 90-degree square camera (|x| = |y| = 1 in normalized coords) range = sqrt(3) z.
+    """
+    z = _float("z", z)
+    z = np.where(valid_mask(z), z, np.nan)
+    return (z * _ray_norm(camera, z.shape)).astype(np.float32)
+
+
+def z_from_range(r, camera) -> np.ndarray:
+    """Planar z from range along the ray; inverse of :func:`range_from_z`. Invalid -> NaN."""
+    r = _float("range", r)
+    r = np.where(valid_mask(r), r, np.nan)
+    return (r / _ray_norm(camera, r.shape)).astype(np.float32)
+
+
+def z_from_disparity(d, *, baseline: float, focal_px: float, doffs: float = 0.0) -> np.ndarray:
+    """Planar z = baseline * focal_px / (d + doffs) (Middlebury convention).
+
+    ``d`` in pixels; z in the units of ``baseline``. Pixels with d + doffs <= 0 or non-finite d
+    become NaN. Example: motorcycle (quarter size) f = 994.978 px, B = 193.001 mm,
+    doffs = 31.086: d = 100 gives z = 1465.0 mm.
+    """
+    d = _float("disparity", d)
+    b = check_positive("baseline", baseline)
+    f = check_positive("focal_px", focal_px)
+    off = check_finite_scalar("doffs", doffs)
+    den = d + off
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(np.isfinite(den) & (den > 0), b * f / den, np.nan)
+    return z.astype(np.float32)
+
+
+def disparity_from_z(z, *, baseline: float, focal_px: float, doffs: float = 0.0) -> np.ndarray:
+    """Disparity d = baseline * focal_px / z - doffs; inverse of :func:`z_from_disparity`."""
+    z = _float("z", z)
+    b = check_positive("baseline", baseline)
+    f = check_positive("focal_px", focal_px)
+    off = check_finite_scalar("doffs", doffs)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = np.where(valid_mask(z), b * f / z - off, np.nan)
+    return d.astype(np.float32)
+
+
+def window_from_z(z, *, near: float, far: float) -> np.ndarray:
+    """Window-space depth w = f / (f - n) * (1 - n / z) in [0, 1] (float64).
+
+    w = 0 at the near plane and 1 at the far plane (tends to 1 as z -> inf for far = inf).
+    Invalid z -> NaN. Values outside [n, f] are returned unclipped (w < 0 or w > 1).
+    """
+    n, f = _near_far(near, far)
+    z = _float("z", z)
+    ratio = 1.0 if np.isinf(f) else f / (f - n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(valid_mask(z), ratio * (1 - n / z), np.nan)
+
+
+def z_from_window(w, *, near: float, far: float) -> np.ndarray:
+    """Planar z from window depth: z = n f / (f - w (f - n)) (exact inverse; float32).
+
+    w outside [0, 1], NaN or inf -> NaN. w = 1 (the cleared far plane) is the far plane itself;
+    use :func:`sanitize_depth` with ``far`` slightly below it to treat cleared pixels as empty.
+    For far = inf, z = n / (1 - w) and w = 1 -> NaN.
+    """
+    n, f = _near_far(near, far)
+    w = _float("w", w)
+    ok = np.isfinite(w) & (w >= 0) & (w <= 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if np.isinf(f):
+            z = n / (1 - w)
+            ok &= w < 1
+        else:
+            z = n * f / (f - w * (f - n))
+    return np.where(ok, z, np.nan).astype(np.float32)
+
+
+def reversed_from_z(z, *, near: float, far: float) -> np.ndarray:
+    """Reversed-z window depth: 1 - w for finite far, n / z for an infinite far plane."""
+    n, f = _near_far(near, far)
+    if np.isinf(f):
+        z = _float("z", z)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(valid_mask(z), n / z, np.nan)
+    return 1.0 - window_from_z(z, near=n, far=f)
+
+
+def z_from_reversed(w_rev, *, near: float, far: float) -> np.ndarray:
+    """Planar z from reversed-z depth; inverse of :func:`reversed_from_z`. 0 (far/cleared) -> NaN
+    for an infinite far plane, the far plane otherwise."""
+    n, f = _near_far(near, far)
+    w_rev = _float("w_rev", w_rev)
+    if np.isinf(f):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ok = np.isfinite(w_rev) & (w_rev > 0) & (w_rev <= 1)
+            return np.where(ok, n / w_rev, np.nan).astype(np.float32)
+    return z_from_window(1.0 - w_rev, near=n, far=f)
+
+
+def _check_bits(bits) -> int:
+    if bits not in (16, 24, 32):
+        raise ValueError(f"bits: expected 16, 24 or 32, got {bits!r}")
+    return int(bits)
+
+
+def fixed_from_z(z, *, near: float, far: float, bits: int = 24) -> np.ndarray:
+    """Fixed-point z-buffer codes q = round(w * (2^bits - 1)) as uint16 (16 bits) or uint32.
+
+    Depth outside [near, far] is clamped to the nearest end code, as a GPU depth test would
+    store it; invalid depth (NaN, <= 0) is stored as the far code (a cleared buffer).
+    """
+    bits = _check_bits(bits)
+    n, f = _near_far(near, far)
+    if np.isinf(f):
+        raise ValueError("far: a fixed-point z-buffer needs a finite far plane")
+    w = window_from_z(z, near=n, far=f)
+    top = 2**bits - 1
+    q = np.rint(np.clip(np.nan_to_num(w, nan=1.0), 0.0, 1.0) * top)
+    return q.astype(np.uint16 if bits == 16 else np.uint32)
+
+
+def z_from_fixed(q, *, near: float, far: float, bits: int = 24, far_is_empty: bool = True) -> np.ndarray:
+    """Planar z from fixed-point z-buffer codes; the far code is empty (NaN) by default."""
+    bits = _check_bits(bits)
+    q = check_array("q", q, dtype_kind="iu")
+    top = 2**bits - 1
+    if q.size and (q.min() < 0 or q.max() > top):
+        raise ValueError(f"q: codes must lie in [0, {top}] for {bits} bits, got [{q.min()}, {q.max()}]")
+    z = z_from_window(q.astype(np.float64) / top, near=near, far=far)
+    if far_is_empty:
+        z[q == top] = np.nan
+    return z
+
+
+def zbuffer_step(z, *, near: float, far: float, bits: int) -> np.ndarray:
+    """Depth change (scene units) of one code step of a fixed-point z-buffer at depth z.
+
+    Exact: the distance from z to the depth of the next code, ``z(w + 1/(2^bits - 1)) - z(w)``;
+    to first order ``z^2 (f - n) / (n f (2^bits - 1))``. NaN where the next code is past far.
+    Example (n = 0.1, f = 100, 16 bits): 1.52e-4 at z = 1 and 1.53e-2 at z = 10.
+    """
+    bits = _check_bits(bits)
+    n, f = _near_far(near, far)
+    w = window_from_z(z, near=n, far=f)
+    w_next = w + 1.0 / (2**bits - 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z0 = n * f / (f - w * (f - n))
+        z1 = np.where(w_next <= 1, n * f / (f - w_next * (f - n)), np.nan)
+    return z1 - z0
+
+
+def zprime_from_z(z, *, near: float, far: float, scale: float = ZPRIME_SCALE) -> np.ndarray:
+    """Seed 002 eq. 2: z' = 2^24 * f / (f - n) * (1 - n / z) (float64, unquantized).
+
+    z' is affine in 1/z, hence affine in pixel coordinates over any plane. NaN for invalid z.
+    """
+    return scale * window_from_z(z, near=near, far=far)
+
+
+def z_from_zprime(zp, *, near: float, far: float, scale: float = ZPRIME_SCALE) -> np.ndarray:
+    """Inverse of :func:`zprime_from_z` (float32 planar z)."""
+    return z_from_window(_float("zp", zp) / scale, near=near, far=far)

@@ -1,0 +1,72 @@
+"""An RGB-D view: color, planar depth and the camera that saw them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import check_image
+from .camera import Camera
+
+__all__ = ["View"]
+
+
+@dataclass(frozen=True, eq=False)
+class View:
+    """One RGB-D view.
+
+    Parameters
+    ----------
+    color : (H, W, 3) or (H, W) array
+        uint8, uint16 or float32 color; float colors are linear or display values in [0, 1].
+    depth : (H, W) float32 array or None
+        Planar z (along the camera's optical axis) in scene units, NaN where invalid. ``None``
+        for a view that carries color and camera only (e.g. the Middlebury right image).
+    camera : Camera
+        Camera whose image size equals the color's.
+    name : str
+        Short label used in messages and file names.
+    """
+
+    color: np.ndarray
+    depth: np.ndarray | None
+    camera: Camera
+    name: str = "view"
+
+    def __post_init__(self):
+        color = check_image("color", self.color, channels=(1, 3, 4))
+        if not isinstance(self.camera, Camera):
+            raise TypeError(f"camera: expected a Camera, got {type(self.camera).__name__}")
+        if color.shape[:2] != self.camera.shape:
+            raise ValueError(
+                f"color: size {color.shape[1]}x{color.shape[0]} does not match camera size "
+                f"{self.camera.width}x{self.camera.height}"
+            )
+        if self.depth is not None:
+            depth = check_image("depth", self.depth, channels=(1,))
+            depth = depth.reshape(depth.shape[:2])
+            if depth.shape != color.shape[:2]:
+                raise ValueError(
+                    f"depth: size {depth.shape[1]}x{depth.shape[0]} does not match color size "
+                    f"{color.shape[1]}x{color.shape[0]}"
+                )
+            depth = depth.astype(np.float32, copy=True)
+            with np.errstate(invalid="ignore"):
+                depth[~(np.isfinite(depth) & (depth > 0))] = np.nan
+            object.__setattr__(self, "depth", depth)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Image shape ``(height, width)``."""
+        return self.camera.shape
+
+    @property
+    def has_depth(self) -> bool:
+        return self.depth is not None
+
+    def require_depth(self, what: str = "this operation") -> np.ndarray:
+        """Return the depth or raise a clear error naming the view."""
+        if self.depth is None:
+            raise ValueError(f"view {self.name!r}: {what} needs depth, but the view has none")
+        return self.depth

@@ -1,0 +1,1 @@
+"""panorama: spherical images (equirectangular, cubemaps, perspective views) built on ``ibr``."""
