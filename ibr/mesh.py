@@ -1,0 +1,202 @@
+"""Adaptive planar quad meshes from a depth buffer (seed 002, section 1.2).
+
+A :class:`QuadMesh` is the output of the segmentation in :mod:`ibr.segment`: one planar quad per
+rectangle of source pixels, stored as arrays (no Python object per quad).
+
+Conventions
+-----------
+* Pixel (u, v) = (column, row), centers at integer coordinates; the image spans
+  [-0.5, W - 0.5] x [-0.5, H - 0.5]. A rect ``[u0, v0, u1, v1]`` covers the half-open pixel ranges
+  ``u0 .. u1-1`` and ``v0 .. v1-1``; its outer pixel edges (the quad's corners) are at
+  ``u0 - 0.5``, ``u1 - 0.5``, ``v0 - 0.5``, ``v1 - 0.5``. Example: rect [2, 3, 6, 4] covers pixels
+  (2..5, 3) and has corners u in {1.5, 5.5}, v in {2.5, 3.5}.
+* Each quad carries the plane of **inverse planar depth** ``1/z(u, v) = a*u + b*v + c`` in source
+  pixel coordinates (a least-squares fit over the rect's pixel centers). 1/z is affine in (u, v) over
+  any scene plane (seed 002 eq. 2: z' is affine in 1/z), so extending the fit to the pixel-edge
+  corners (the seed's half-pixel outward expansion) is exact for planar surfaces.
+* In the source camera frame the quad's plane is ``n . X = 1`` with
+  ``n = (a*fx, b*fy, a*cx + b*cy + c)``.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .camera import Camera
+
+__all__ = [
+    "QuadMesh",
+    "build_mesh",
+    "fit_inv_depth_planes",
+    "mesh_depth",
+    "write_obj",
+    "write_ply",
+    "segmentation_image",
+    "write_segmentation_png",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class QuadMesh:
+    """Planar quads over rectangles of source pixels (contract 3 of the team brief).
+
+    Parameters
+    ----------
+    camera : Camera
+        The source camera (the quads live in its camera frame).
+    rects : (Q, 4) int32
+        ``[u0, v0, u1, v1]`` half-open pixel ranges: columns ``u0 .. u1-1``, rows ``v0 .. v1-1``.
+    inv_depth_planes : (Q, 3) float64
+        ``(a, b, c)`` with ``1/z(u, v) = a*u + b*v + c`` in source pixel coordinates (centers at
+        integers), valid on the whole rect extended to its pixel-edge corners ``u0-0.5 .. u1-0.5``.
+        A one-pixel rect has ``a = b = 0``, ``c = 1/z`` of its center.
+    quad_of_pixel : (H, W) int32
+        Index of the quad covering each source pixel, -1 for pixels with no quad (invalid depth).
+    info : dict
+        Free-form metadata (method, threshold, tolerance, timings); not used by consumers.
+    """
+
+    camera: Camera
+    rects: np.ndarray
+    inv_depth_planes: np.ndarray
+    quad_of_pixel: np.ndarray
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if not isinstance(self.camera, Camera):
+            raise TypeError(f"camera: expected a Camera, got {type(self.camera).__name__}")
+        rects = np.ascontiguousarray(self.rects, dtype=np.int32).reshape(-1, 4)
+        planes = np.ascontiguousarray(self.inv_depth_planes, dtype=np.float64).reshape(-1, 3)
+        qop = np.ascontiguousarray(self.quad_of_pixel, dtype=np.int32)
+        if planes.shape[0] != rects.shape[0]:
+            raise ValueError(
+                f"inv_depth_planes: expected shape ({rects.shape[0]}, 3) to match rects, got {planes.shape}"
+            )
+        if qop.shape != self.camera.shape:
+            raise ValueError(f"quad_of_pixel: expected shape {self.camera.shape}, got {qop.shape}")
+        for a in (rects, planes, qop):
+            a.setflags(write=False)
+        object.__setattr__(self, "rects", rects)
+        object.__setattr__(self, "inv_depth_planes", planes)
+        object.__setattr__(self, "quad_of_pixel", qop)
+
+    def __len__(self) -> int:
+        return len(self.rects)
+
+    # ----------------------------------------------------------------- derived arrays
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Source image shape ``(H, W)``."""
+        return self.camera.shape
+
+    @property
+    def areas(self) -> np.ndarray:
+        """(Q,) number of source pixels covered by each quad."""
+        r = self.rects.astype(np.int64)
+        return (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])
+
+    @property
+    def one_pixel_share(self) -> float:
+        """Share of quads that cover a single pixel (0 for an empty mesh)."""
+        return float(np.mean(self.areas == 1)) if len(self) else 0.0
+
+    @property
+    def corners_uv(self) -> np.ndarray:
+        """(Q, 4, 2) pixel-edge corners ``(u0-.5, v0-.5), (u1-.5, v0-.5), (u1-.5, v1-.5), (u0-.5, v1-.5)``."""
+        r = self.rects.astype(np.float64) - 0.5
+        u0, v0, u1, v1 = r[:, 0], r[:, 1], r[:, 2], r[:, 3]
+        return np.stack(
+            [np.stack([u0, v0], -1), np.stack([u1, v0], -1), np.stack([u1, v1], -1), np.stack([u0, v1], -1)], 1
+        )
+
+    @property
+    def corners_inv_depth(self) -> np.ndarray:
+        """(Q, 4) inverse depth 1/z of the plane at the four corners (see :attr:`corners_uv`)."""
+        uv = self.corners_uv
+        p = self.inv_depth_planes
+        return p[:, None, 0] * uv[..., 0] + p[:, None, 1] * uv[..., 1] + p[:, None, 2]
+
+    @property
+    def corners_cam(self) -> np.ndarray:
+        """(Q, 4, 3) camera-frame corners of each quad, order as :attr:`corners_uv`.
+
+        A corner whose plane gives 1/z <= 0 (plane through or behind the camera; only possible for
+        grazing fits at the image border) is NaN.
+        """
+        uv = self.corners_uv
+        q = self.corners_inv_depth
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.where(q > 0, 1.0 / q, np.nan)
+        return self.camera.unproject(uv, z, frame="cam")
+
+    @property
+    def plane_normals_cam(self) -> np.ndarray:
+        """(Q, 3) ``n`` such that the quad's plane is ``n . X_cam = 1``: ``(a fx, b fy, a cx + b cy + c)``."""
+        cam = self.camera
+        a, b, c = self.inv_depth_planes.T
+        return np.stack([a * cam.fx, b * cam.fy, a * cam.cx + b * cam.cy + c], -1)
+
+    def depth(self) -> np.ndarray:
+        """(H, W) float32 planar depth of the mesh at each source pixel center (NaN where no quad)."""
+        return mesh_depth(self)
+
+    def __repr__(self) -> str:
+        h, w = self.shape
+        return f"QuadMesh({len(self)} quads over {w}x{h}, one-pixel share {self.one_pixel_share:.1%})"
+
+
+def mesh_depth(mesh: QuadMesh) -> np.ndarray:
+    """Planar depth z of the mesh evaluated at every source pixel center, NaN where no quad."""
+    h, w = mesh.shape
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    idx = mesh.quad_of_pixel
+    ok = idx >= 0
+    p = mesh.inv_depth_planes[idx[ok]]
+    q = p[:, 0] * u[ok] + p[:, 1] * v[ok] + p[:, 2]
+    out = np.full((h, w), np.nan, np.float32)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out[ok] = np.where(q > 0, 1.0 / q, np.nan)
+    return out
+
+
+def fit_inv_depth_planes(depth, rects) -> np.ndarray:
+    """Least-squares planes of inverse depth over rectangles; see :func:`ibr.segment` for the fit.
+
+    Placeholder until the segmentation module lands (implemented below in this module)."""
+    from ._segment_kernels import fit_planes_inv_depth
+
+    inv = _inv_depth(depth)
+    return fit_planes_inv_depth(inv, np.ascontiguousarray(rects, dtype=np.int32))
+
+
+def _inv_depth(depth) -> np.ndarray:
+    z = np.asarray(depth, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(np.isfinite(z) & (z > 0), 1.0 / z, np.nan)
+
+
+def build_mesh(view, *, threshold=None, max_error_px=None, method=None, **kwargs) -> QuadMesh:
+    """Build the adaptive quad mesh of a view (implemented below)."""
+    raise NotImplementedError("build_mesh: work in progress")
+
+
+def write_obj(mesh, path, **kwargs):  # pragma: no cover - filled in below
+    raise NotImplementedError
+
+
+def write_ply(mesh, path, **kwargs):  # pragma: no cover - filled in below
+    raise NotImplementedError
+
+
+def segmentation_image(mesh, color, **kwargs):  # pragma: no cover - filled in below
+    raise NotImplementedError
+
+
+def write_segmentation_png(mesh, color, path, **kwargs):  # pragma: no cover - filled in below
+    raise NotImplementedError
