@@ -1,0 +1,84 @@
+"""The Middlebury 2014 motorcycle stereo pair (``skimage.data.stereo_motorcycle``) as two views.
+
+Calibration (from the skimage docstring, valid for the quarter-size 741x500 images)::
+
+    focal length f = 994.978 px, principal point (cx, cy) = (311.193, 254.877) px,
+    doffs = cx_right - cx_left = 31.086 px, baseline B = 193.001 mm
+
+Scene unit: the **metre** (B = 0.193001). The left camera sits at the world origin with the
+identity pose; the right camera has the same focal length and cy, ``cx_right = cx + doffs`` and
+is translated by +B along the camera x axis (to the right). A left pixel (u, v) with planar depth
+z then lands in the right image at ``u_right = u - d`` with disparity ``d = B f / z - doffs``,
+i.e. ``z = B f / (d + doffs)`` (Middlebury convention), same row v. Example: d = 100 px gives
+z = 0.193001 * 994.978 / 131.086 = 1.4649 m.
+
+Note: the skimage docstring's example "``img_left[10, 10 + disp[10, 10]]`` corresponds to
+``img_right[10, 10]``" has the sign the other way round; the tests check ``u - d`` against the
+real images photometrically. Invalid disparities (stored as +inf) become NaN depth.
+Pixel convention as everywhere: pixel (u, v) = (column, row) has its center at integer
+coordinates; the calibration values are used as given.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .camera import Camera
+from .depth import z_from_disparity
+from .view import View
+
+__all__ = [
+    "MOTORCYCLE_CALIBRATION",
+    "motorcycle_cameras",
+    "motorcycle_disparity",
+    "motorcycle_views",
+]
+
+#: Quarter-size calibration of the motorcycle pair, pixels and metres.
+MOTORCYCLE_CALIBRATION = {
+    "focal_px": 994.978,
+    "cx": 311.193,
+    "cy": 254.877,
+    "doffs": 31.086,
+    "baseline": 0.193001,
+    "width": 741,
+    "height": 500,
+}
+
+
+def motorcycle_cameras() -> tuple[Camera, Camera]:
+    """Left and right cameras of the motorcycle pair (metres; right = left moved +B along x)."""
+    c = MOTORCYCLE_CALIBRATION
+    f, w, h = c["focal_px"], c["width"], c["height"]
+    left = Camera(f, f, c["cx"], c["cy"], w, h)
+    right_pose = np.eye(4)
+    right_pose[0, 3] = c["baseline"]
+    right = Camera(f, f, c["cx"] + c["doffs"], c["cy"], w, h, right_pose)
+    return left, right
+
+
+def motorcycle_disparity() -> np.ndarray:
+    """Ground-truth left disparity (500, 741) float32 in pixels, NaN where unknown."""
+    from skimage.data import stereo_motorcycle
+
+    disp = np.asarray(stereo_motorcycle()[2], dtype=np.float32).copy()
+    disp[~np.isfinite(disp)] = np.nan
+    return disp
+
+
+def motorcycle_views() -> tuple[View, View]:
+    """The motorcycle pair as ``(left, right)`` views.
+
+    ``left.depth`` is planar z in metres, ``z = B f / (d + doffs)``, NaN where the disparity is
+    unknown; ``right.depth`` is None (Middlebury ships no right ground truth in skimage).
+    Colors are uint8 RGB (500, 741, 3).
+    """
+    from skimage.data import stereo_motorcycle
+
+    img_left, img_right, disp = stereo_motorcycle()
+    c = MOTORCYCLE_CALIBRATION
+    z = z_from_disparity(disp, baseline=c["baseline"], focal_px=c["focal_px"], doffs=c["doffs"])
+    cam_left, cam_right = motorcycle_cameras()
+    left = View(np.ascontiguousarray(img_left), z, cam_left, "motorcycle_left")
+    right = View(np.ascontiguousarray(img_right), None, cam_right, "motorcycle_right")
+    return left, right
