@@ -120,7 +120,7 @@ def z_from_disparity(d, *, baseline: float, focal_px: float, doffs: float = 0.0)
 
     ``d`` in pixels; z in the units of ``baseline``. Pixels with d + doffs <= 0 or non-finite d
     become NaN. Example: motorcycle (quarter size) f = 994.978 px, B = 193.001 mm,
-    doffs = 31.086: d = 100 gives z = 1465.0 mm.
+    doffs = 31.086: d = 100 gives z = 1464.9 mm.
     """
     d = _float("disparity", d)
     b = check_positive("baseline", baseline)
