@@ -341,7 +341,7 @@ def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
     if np.linalg.norm(z) == 0:
         raise ValueError("target: must differ from eye")
     z /= np.linalg.norm(z)
-    x = np.cross(z, -up)  # image y points down = -up
+    x = np.cross(z, up)  # x = y_cam × z with y_cam = -up (image y points down)
     if np.linalg.norm(x) < 1e-12:
         raise ValueError("up: must not be parallel to the viewing direction")
     x /= np.linalg.norm(x)
