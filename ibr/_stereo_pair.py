@@ -1,0 +1,224 @@
+"""numba kernels of seed 003's method 2 (per-pixel mapping) and the background-side hole fill.
+
+Private: :mod:`ibr.stereo_pair` validates, allocates and calls these. Each kernel has a plain
+numpy/Python reference below (``*_reference``) that the tests compare against.
+
+Pixel convention: pixel centers at integer coordinates; a source pixel u maps to the target
+position ``x(u) = u + shift(u)`` with ``shift = -fx * dx / z + dpixel`` (seed 003 method 2 with
+Dz = 0, so rows are preserved exactly: v' = v).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+__all__: list[str] = []
+
+
+@njit(cache=True, parallel=True)
+def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, out_cov):
+    """Row-preserving forward mapping with linear interpolation between connected neighbors.
+
+    color (H, W, C) float32, z (H, W) float32 (NaN invalid); outputs preallocated:
+    out_color (H, W, C) float32 zeros, out_depth (H, W) float32 inf, out_cov (H, W) bool False.
+
+    Neighbors i, i+1 (both valid) are connected when their shifts differ by at most
+    ``max_jump_px`` (a larger jump is a depth edge: disocclusion, left as a hole). A connected
+    segment covers the target pixel centers j with x_i <= j <= x_{i+1}; inverse depth and color
+    are interpolated linearly in x (exact for inverse depth on planes). A pixel's outer half
+    footprint [x - 0.5, x] / [x, x + 0.5] on an unconnected side takes its own color and depth.
+    Z-buffer: nearest wins.
+    """
+    h, w, nc = color.shape
+    for v in prange(h):
+        for i in range(w):
+            zi = z[v, i]
+            if not (zi > 0):
+                continue
+            xi = i - fx * dx / zi + dpixel
+            izi = 1.0 / zi
+            # right neighbour
+            conn_r = False
+            if i + 1 < w:
+                zr = z[v, i + 1]
+                if zr > 0:
+                    xr = i + 1 - fx * dx / zr + dpixel
+                    if abs((xr - (i + 1)) - (xi - i)) <= max_jump_px:
+                        conn_r = True
+                        izr = 1.0 / zr
+                        a, b = xi, xr
+                        if a > b:
+                            a, b = b, a
+                        j0 = max(int(np.ceil(a)), 0)
+                        j1 = min(int(np.floor(b)), w - 1)
+                        span = xr - xi
+                        for j in range(j0, j1 + 1):
+                            t = 0.0 if span == 0 else (j - xi) / span
+                            iz = izi + t * (izr - izi)
+                            zz = 1.0 / iz
+                            if zz < out_depth[v, j]:
+                                out_depth[v, j] = zz
+                                out_cov[v, j] = True
+                                for c in range(nc):
+                                    out_color[v, j, c] = color[v, i, c] + t * (color[v, i + 1, c] - color[v, i, c])
+            # left neighbour connected?
+            conn_l = False
+            if i > 0:
+                zl = z[v, i - 1]
+                if zl > 0:
+                    xl = i - 1 - fx * dx / zl + dpixel
+                    if abs((xi - i) - (xl - (i - 1))) <= max_jump_px:
+                        conn_l = True
+            # half footprints on unconnected sides: [x - 0.5, x] and [x, x + 0.5)
+            for side in range(2):
+                if side == 0 and conn_l:
+                    continue
+                if side == 1 and conn_r:
+                    continue
+                if side == 0:
+                    j0 = max(int(np.ceil(xi - 0.5)), 0)
+                    j1 = min(int(np.floor(xi)), w - 1)
+                else:
+                    j0 = max(int(np.ceil(xi)), 0)
+                    j1 = min(int(np.ceil(xi + 0.5)) - 1, w - 1)
+                for j in range(j0, j1 + 1):
+                    if zi < out_depth[v, j]:
+                        out_depth[v, j] = zi
+                        out_cov[v, j] = True
+                        for c in range(nc):
+                            out_color[v, j, c] = color[v, i, c]
+
+
+@njit(cache=True)
+def point_splat(color, z, fx, fy, cx, cy, dx, dz, dpixel, out_color, out_depth, out_cov):
+    """Seed 003 method 2 literally: each pixel copied to the rounded target position
+    ``u' = fx (X - dx)/(Z - dz) + cx + dpixel``, ``v' = fy Y/(Z - dz) + cy``, z-buffered."""
+    h, w, nc = color.shape
+    for v in range(h):
+        for u in range(w):
+            zz = z[v, u]
+            if not (zz > 0):
+                continue
+            x = (u - cx) / fx * zz
+            y = (v - cy) / fy * zz
+            zt = zz - dz
+            if zt <= 0:
+                continue
+            ut = fx * (x - dx) / zt + cx + dpixel
+            vt = fy * y / zt + cy
+            j = int(np.floor(ut + 0.5))
+            k = int(np.floor(vt + 0.5))
+            if 0 <= j < w and 0 <= k < h and zt < out_depth[k, j]:
+                out_depth[k, j] = zt
+                out_cov[k, j] = True
+                for c in range(nc):
+                    out_color[k, j, c] = color[v, u, c]
+
+
+@njit(cache=True, parallel=True)
+def fill_rows_background(color, depth, cov, out_holes):
+    """Fill each uncovered run of a row with the deeper of its two covered neighbours
+    (the background side); a run touching the image border takes its only neighbour.
+    Runs with no covered pixel in the row stay 0 / NaN. In place; marks ``out_holes``."""
+    h, w, nc = color.shape
+    for v in prange(h):
+        j = 0
+        while j < w:
+            if cov[v, j]:
+                j += 1
+                continue
+            a = j
+            while j < w and not cov[v, j]:
+                j += 1
+            b = j  # run is [a, b)
+            left = a - 1
+            right = b if b < w else -1
+            src = -1
+            if left >= 0 and right >= 0:
+                src = left if depth[v, left] >= depth[v, right] else right
+            elif left >= 0:
+                src = left
+            elif right >= 0:
+                src = right
+            for k in range(a, b):
+                out_holes[v, k] = True
+                if src >= 0:
+                    depth[v, k] = depth[v, src]
+                    for c in range(nc):
+                        color[v, k, c] = color[v, src, c]
+
+
+# ---------------------------------------------------------------------- references
+def scanline_warp_reference(color, z, fx, dx, dpixel, max_jump_px):
+    """numpy reference of :func:`scanline_warp`: per row, every candidate (segment or half
+    footprint) evaluated at every target pixel center, the nearest kept. O(W^2) per row."""
+    h, w, nc = color.shape
+    out_c = np.zeros((h, w, nc), np.float32)
+    out_z = np.full((h, w), np.inf, np.float32)
+    cov = np.zeros((h, w), bool)
+    j = np.arange(w, dtype=np.float64)
+    for v in range(h):
+        zr = z[v].astype(np.float64)
+        valid = zr > 0
+        with np.errstate(invalid="ignore", divide="ignore"):
+            x = np.arange(w) - fx * dx / zr + dpixel
+        shift = x - np.arange(w)
+        conn = valid[:-1] & valid[1:] & (np.abs(shift[1:] - shift[:-1]) <= max_jump_px)
+        best = np.full(w, np.inf)
+        col = np.zeros((w, nc))
+        for i in range(w - 1):
+            if not conn[i]:
+                continue
+            a, b = sorted((x[i], x[i + 1]))
+            inside = (j >= a) & (j <= b)
+            span = x[i + 1] - x[i]
+            t = np.zeros(w) if span == 0 else (j - x[i]) / span
+            zz = 1.0 / (1 / zr[i] + t * (1 / zr[i + 1] - 1 / zr[i]))
+            ccol = color[v, i][None, :] + t[:, None] * (color[v, i + 1] - color[v, i])[None, :]
+            upd = inside & (zz < best)
+            best[upd] = zz[upd]
+            col[upd] = ccol[upd]
+        for i in range(w):
+            if not valid[i]:
+                continue
+            cl = i > 0 and conn[i - 1]
+            cr = i < w - 1 and conn[i]
+            m = np.zeros(w, bool)
+            if not cl:
+                m |= (j >= x[i] - 0.5) & (j <= x[i])
+            if not cr:
+                m |= (j >= x[i]) & (j < x[i] + 0.5)
+            upd = m & (zr[i] < best)
+            best[upd] = zr[i]
+            col[upd] = color[v, i]
+        hit = np.isfinite(best)
+        out_z[v, hit] = best[hit]
+        out_c[v, hit] = col[hit]
+        cov[v] = hit
+    return out_c, out_z, cov
+
+
+def fill_rows_background_reference(color, depth, cov):
+    """numpy reference of :func:`fill_rows_background` (returns copies and the hole mask)."""
+    color = color.copy()
+    depth = depth.copy()
+    holes = np.zeros(cov.shape, bool)
+    h, w = cov.shape
+    for v in range(h):
+        covered = np.flatnonzero(cov[v])
+        for k in np.flatnonzero(~cov[v]):
+            holes[v, k] = True
+            left = covered[covered < k]
+            right = covered[covered > k]
+            cand = []
+            if left.size:
+                cand.append(left[-1])
+            if right.size:
+                cand.append(right[0])
+            if not cand:
+                continue
+            src = cand[0] if len(cand) == 1 or depth[v, cand[0]] >= depth[v, cand[1]] else cand[1]
+            color[v, k] = color[v, src]
+            depth[v, k] = depth[v, src]
+    return color, depth, holes
