@@ -243,9 +243,12 @@ def zbuffer_step(z, *, near: float, far: float, bits: int) -> np.ndarray:
     n, f = _near_far(near, far)
     w = window_from_z(z, near=n, far=f)
     w_next = w + 1.0 / (2**bits - 1)
+    # The far plane itself (w = 1) is the last code; allow for rounding of w computed from z.
+    has_next = w_next <= 1 + 1e-9
+    w_next = np.minimum(w_next, 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         z0 = n * f / (f - w * (f - n))
-        z1 = np.where(w_next <= 1, n * f / (f - w_next * (f - n)), np.nan)
+        z1 = np.where(has_next, n * f / (f - w_next * (f - n)), np.nan)
     return z1 - z0
 
 
