@@ -166,37 +166,308 @@ def mesh_depth(mesh: QuadMesh) -> np.ndarray:
 
 
 def fit_inv_depth_planes(depth, rects) -> np.ndarray:
-    """Least-squares planes of inverse depth over rectangles; see :func:`ibr.segment` for the fit.
+    """Least-squares planes of inverse depth ``1/z = a u + b v + c`` over rects, (Q, 3) float64.
 
-    Placeholder until the segmentation module lands (implemented below in this module)."""
+    Pixel centers at integer (u, v). Over a full rectangle the normal equations decouple in
+    centered coordinates (a = sum(q du)/sum(du^2), b likewise, c = mean), so the fit is exact and
+    cheap; least squares averages 16/24-bit quantization noise instead of trusting the corners. A
+    one-pixel rect gets a = b = 0, c = 1/z of its center. Every pixel of every rect must be valid.
+    """
     from ._segment_kernels import fit_planes_inv_depth
 
-    inv = _inv_depth(depth)
-    return fit_planes_inv_depth(inv, np.ascontiguousarray(rects, dtype=np.int32))
+    q = _inv_depth(depth)
+    r = np.ascontiguousarray(rects, dtype=np.int32).reshape(-1, 4)
+    if len(r) and not np.isfinite(q[_rect_pixels_mask(r, q.shape)]).all():
+        raise ValueError("rects: cover pixels with invalid depth")
+    return fit_planes_inv_depth(q, r)
+
+
+def _rect_pixels_mask(rects, shape) -> np.ndarray:
+    from ._segment_kernels import label_rects
+
+    return label_rects(np.ascontiguousarray(rects, np.int32), shape[0], shape[1]) >= 0
 
 
 def _inv_depth(depth) -> np.ndarray:
     z = np.asarray(depth, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(np.isfinite(z) & (z > 0), 1.0 / z, np.nan)
+        return np.ascontiguousarray(np.where(np.isfinite(z) & (z > 0), 1.0 / z, np.nan))
 
 
-def build_mesh(view, *, threshold=None, max_error_px=None, method=None, **kwargs) -> QuadMesh:
-    """Build the adaptive quad mesh of a view (implemented below)."""
-    raise NotImplementedError("build_mesh: work in progress")
+def build_mesh(
+    view,
+    *,
+    threshold: float | None = None,
+    max_error_px: float | None = None,
+    method: str = "edge",
+    baseline: float | None = None,
+    near: float | None = None,
+    far: float | None = None,
+    min_band: int = 1,
+) -> QuadMesh:
+    """Adaptive planar quad mesh of a view's depth (seed 002 section 1.2, improved).
+
+    Parameters
+    ----------
+    view : View
+        Source view with planar depth (NaN where invalid; those pixels get no quad).
+    threshold : float, optional
+        Level of detail in 24-bit z' units (seed eq. 2; the seed shows 2^15 and 2^11). Exclusive
+        with ``max_error_px``.
+    max_error_px : float, optional
+        Max reprojection error in pixels for a camera move of ``baseline`` (default 0.5 px when
+        neither option is given). With the default ``method="edge"`` it is guaranteed at every
+        source pixel center: each quad's plane reproduces 1/z within
+        ``tol = max_error_px / (f * baseline)`` (``mesh.info["tolerance_inv_depth"]``).
+    method : {"edge", "separate", "paper"}
+        ``"edge"`` (default): edge-aware break edges + error-bounded plane fits. ``"paper"``: the
+        seed's |Δ²z'| and scan split, faithfully. ``"separate"``: the seed's split on separate
+        second differences. See :mod:`ibr.segment`.
+    baseline : float, optional
+        Camera displacement (scene units) for ``max_error_px``; default 5% of the median depth.
+    near, far : float, optional
+        Clip planes that define z'; default the view's depth range.
+    min_band : int
+        The seed's "large enough" band, in lines (``paper``/``separate``).
+
+    Returns
+    -------
+    QuadMesh
+        ``len(mesh)`` is the number of quads; ``mesh.info`` records the parameters and timings.
+
+    Examples
+    --------
+    >>> mesh = build_mesh(view)                        # doctest: +SKIP
+    >>> mesh = build_mesh(view, threshold=2**15, method="paper")  # doctest: +SKIP
+    """
+    from .segment import segment
+    from .view import View
+
+    if not isinstance(view, View):
+        raise TypeError(f"view: expected an ibr.View, got {type(view).__name__}")
+    depth = view.require_depth("build_mesh")
+    t0 = time.perf_counter()
+    seg = segment(
+        depth,
+        camera=view.camera,
+        threshold=threshold,
+        max_error_px=max_error_px,
+        baseline=baseline,
+        method=method,
+        near=near,
+        far=far,
+        min_band=min_band,
+    )
+    return _mesh_from_segmentation(view.camera, depth, seg, t0)
 
 
-def write_obj(mesh, path, **kwargs):  # pragma: no cover - filled in below
-    raise NotImplementedError
+def _mesh_from_segmentation(camera, depth, seg, t0) -> QuadMesh:
+    from ._segment_kernels import fit_planes_inv_depth, label_rects
+
+    q = _inv_depth(depth)
+    planes = fit_planes_inv_depth(q, seg.rects)
+    h, w = camera.shape
+    qop = label_rects(seg.rects, h, w)
+    info = {
+        "method": seg.method,
+        "threshold_zprime": seg.threshold,
+        "tolerance_zprime": seg.tolerance,
+        "tolerance_inv_depth": seg.tolerance_inv_depth,
+        "max_error_px": seg.max_error_px,
+        "baseline": seg.baseline,
+        "near": seg.near,
+        "far": seg.far,
+        "seconds_segment": seg.seconds,
+        "seconds_total": time.perf_counter() - t0,
+    }
+    return QuadMesh(camera, seg.rects, planes, qop, info)
 
 
-def write_ply(mesh, path, **kwargs):  # pragma: no cover - filled in below
-    raise NotImplementedError
+# ------------------------------------------------------------------ export
 
 
-def segmentation_image(mesh, color, **kwargs):  # pragma: no cover - filled in below
-    raise NotImplementedError
+@contextmanager
+def _atomic(path):
+    try:
+        from .io import atomic_path
+    except ImportError:  # pragma: no cover - io always exists in the package
+        atomic_path = None
+    if atomic_path is not None:
+        with atomic_path(path) as tmp:
+            yield tmp
+        return
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".mesh-", suffix=os.path.splitext(str(path))[1], dir=folder)
+    os.close(fd)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
 
 
-def write_segmentation_png(mesh, color, path, **kwargs):  # pragma: no cover - filled in below
-    raise NotImplementedError
+_FRAMES = ("cam", "world")
+
+
+def _export_arrays(mesh: QuadMesh, frame: str):
+    """Vertices (4K, 3), texture coords (4K, 2) and kept quad indices (K,) for export.
+
+    Texture coordinates follow the OBJ/PLY convention (origin at the image's bottom-left):
+    ``s = (u + 0.5) / W``, ``t = 1 - (v + 0.5) / H`` for a pixel-edge corner (u, v); e.g. the
+    image's top-left corner (-0.5, -0.5) maps to (0, 1). Quads with a corner at 1/z <= 0 are left
+    out. Each face lists its corners top-left, bottom-left, bottom-right, top-right, i.e.
+    counter-clockwise as seen from the source camera, so faces point back at the camera.
+    """
+    if frame not in _FRAMES:
+        raise ValueError(f"frame: expected one of {', '.join(map(repr, _FRAMES))}, got {frame!r}")
+    corners = mesh.corners_cam  # TL, TR, BR, BL
+    keep = np.flatnonzero(np.isfinite(corners).all(axis=(1, 2)))
+    corners = corners[keep][:, [0, 3, 2, 1]]
+    uv = mesh.corners_uv[keep][:, [0, 3, 2, 1]]
+    if frame == "world":
+        m = mesh.camera.world_from_cam
+        corners = corners @ m[:3, :3].T + m[:3, 3]
+    h, w = mesh.shape
+    st = np.stack([(uv[..., 0] + 0.5) / w, 1.0 - (uv[..., 1] + 0.5) / h], -1)
+    return corners.reshape(-1, 3), st.reshape(-1, 2), keep
+
+
+def write_obj(mesh: QuadMesh, path, *, texture=None, frame: str = "cam") -> int:
+    """Write the mesh as a Wavefront OBJ of independent textured quads; returns the quad count.
+
+    Parameters
+    ----------
+    mesh : QuadMesh
+    path : str or Path
+        ``.obj`` file, written atomically (temporary name in the same folder, then renamed).
+    texture : str, optional
+        File name of the source image (relative to the OBJ, e.g. ``"color.png"``); when given, a
+        material file ``<stem>.mtl`` with ``map_Kd texture`` is written next to the OBJ.
+    frame : {"cam", "world"}
+        Coordinates of the vertices: the source camera frame (x right, y down, z forward) or the
+        world frame (through ``camera.world_from_cam``).
+
+    Texture coordinates: ``vt = ((u + 0.5) / W, 1 - (v + 0.5) / H)`` at pixel-edge corners, so the
+    image's top-left corner is (0, 1) and bottom-right (1, 0) (OBJ origin bottom-left).
+    """
+    if not isinstance(mesh, QuadMesh):
+        raise TypeError(f"mesh: expected a QuadMesh, got {type(mesh).__name__}")
+    verts, st, keep = _export_arrays(mesh, frame)
+    path = str(path)
+    stem = os.path.splitext(os.path.basename(path))[0]
+    lines = [f"# ibr quad mesh: {len(keep)} quads, {mesh.shape[1]}x{mesh.shape[0]} source, frame={frame}\n"]
+    if texture is not None:
+        lines.append(f"mtllib {stem}.mtl\nusemtl source\n")
+    buf = []
+    buf.append("".join("v %.9g %.9g %.9g\n" % tuple(p) for p in verts))
+    buf.append("".join("vt %.9g %.9g\n" % tuple(t) for t in st))
+    idx = np.arange(1, 4 * len(keep) + 1).reshape(-1, 4)
+    buf.append("".join("f %d/%d %d/%d %d/%d %d/%d\n" % (a, a, b, b, c, c, d, d) for a, b, c, d in idx))
+    if texture is not None:
+        mtl = os.path.join(os.path.dirname(path), f"{stem}.mtl")
+        with _atomic(mtl) as tmp, open(tmp, "w") as fh:
+            fh.write(f"newmtl source\nKa 1 1 1\nKd 1 1 1\nillum 0\nmap_Kd {texture}\n")
+    with _atomic(path) as tmp, open(tmp, "w") as fh:
+        fh.write("".join(lines))
+        fh.writelines(buf)
+    return len(keep)
+
+
+def write_ply(mesh: QuadMesh, path, *, texture=None, frame: str = "cam") -> int:
+    """Write the mesh as a binary little-endian PLY of textured quads; returns the quad count.
+
+    Vertices carry ``x y z`` (float32, frame as in :func:`write_obj`) and per-vertex texture
+    coordinates ``s t`` (same convention as :func:`write_obj`); faces are quads. ``texture`` adds a
+    ``comment TextureFile <name>`` header line (MeshLab's convention). Written atomically.
+    """
+    if not isinstance(mesh, QuadMesh):
+        raise TypeError(f"mesh: expected a QuadMesh, got {type(mesh).__name__}")
+    verts, st, keep = _export_arrays(mesh, frame)
+    nv, nf = len(verts), len(keep)
+    header = ["ply", "format binary_little_endian 1.0", f"comment ibr quad mesh, frame={frame}"]
+    if texture is not None:
+        header.append(f"comment TextureFile {texture}")
+    header += [
+        f"element vertex {nv}",
+        "property float x",
+        "property float y",
+        "property float z",
+        "property float s",
+        "property float t",
+        f"element face {nf}",
+        "property list uchar int vertex_indices",
+        "end_header",
+    ]
+    vdt = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("s", "<f4"), ("t", "<f4")])
+    v = np.empty(nv, vdt)
+    v["x"], v["y"], v["z"] = verts.T
+    v["s"], v["t"] = st.T
+    fdt = np.dtype([("n", "u1"), ("i", "<i4", (4,))])
+    f = np.empty(nf, fdt)
+    f["n"] = 4
+    f["i"] = np.arange(nv, dtype=np.int32).reshape(-1, 4)
+    with _atomic(path) as tmp, open(tmp, "wb") as fh:
+        fh.write(("\n".join(header) + "\n").encode("ascii"))
+        fh.write(v.tobytes())
+        fh.write(f.tobytes())
+    return nf
+
+
+def segmentation_image(mesh: QuadMesh, color, *, line_color=(255, 40, 40), one_pixel_color=(255, 220, 0),
+                       invalid_color=(0, 0, 0)) -> np.ndarray:
+    """(H, W, 3) uint8 picture of the segmentation over the source image (seed plate I-A).
+
+    The first column and first row of each quad's rect are drawn in ``line_color`` (so every
+    boundary is a one-pixel line); one-pixel quads in
+    ``one_pixel_color``; pixels with no quad in ``invalid_color``; the rest shows the source image
+    (float colors are taken as [0, 1], uint16 as [0, 65535]), dimmed to 70% for contrast.
+    """
+    from ._validate import check_image
+
+    img = check_image("color", color, channels=(1, 3, 4))
+    if img.shape[:2] != mesh.shape:
+        raise ValueError(f"color: expected size {mesh.shape[1]}x{mesh.shape[0]}, got {img.shape[1]}x{img.shape[0]}")
+    if img.ndim == 2:
+        img = img[..., None]
+    img = img[..., :3]
+    if img.shape[2] == 1:
+        img = np.repeat(img, 3, axis=2)
+    if img.dtype == np.uint8:
+        base = img.astype(np.float32) / 255
+    elif img.dtype == np.uint16:
+        base = img.astype(np.float32) / 65535
+    else:
+        base = np.clip(np.nan_to_num(img.astype(np.float32)), 0, 1)
+    out = (base * 0.7 * 255 + 0.5).astype(np.uint8)
+    lab = mesh.quad_of_pixel
+    border = np.zeros(lab.shape, bool)
+    # one-pixel-wide outlines: the left/top pixel row or column of every rect
+    border[:, 1:] |= lab[:, 1:] != lab[:, :-1]
+    border[1:, :] |= lab[1:, :] != lab[:-1, :]
+    border[0, :] = border[:, 0] = True
+    areas = mesh.areas
+    one = np.zeros(lab.shape, bool)
+    ok = lab >= 0
+    one[ok] = areas[lab[ok]] == 1
+    out[border & ok] = line_color
+    out[one] = one_pixel_color
+    out[~ok] = invalid_color
+    return out
+
+
+def write_segmentation_png(mesh: QuadMesh, color, path, *, scale: int = 1) -> None:
+    """Write :func:`segmentation_image` as an 8-bit PNG (atomically), upscaled by ``scale``
+    (nearest neighbor) so that one-pixel quads stay visible."""
+    import cv2
+
+    img = segmentation_image(mesh, color)
+    if isinstance(scale, bool) or int(scale) != scale or scale < 1:
+        raise ValueError(f"scale: expected an integer >= 1, got {scale!r}")
+    if scale > 1:
+        img = np.repeat(np.repeat(img, scale, 0), scale, 1)
+    if not str(path).lower().endswith(".png"):
+        raise ValueError(f"path: expected a .png file name, got {path!r}")
+    with _atomic(path) as tmp:
+        if not cv2.imwrite(str(tmp), img[..., ::-1]):
+            raise OSError(f"{path}: could not write the PNG")

@@ -1,0 +1,500 @@
+"""Depth-buffer segmentation into planar rectangles (seed 002, section 1.2).
+
+Pipeline: planar depth z -> nonlinear depth z' (seed eq. 2, 2^24 scale) -> per-pixel planarity
+measure (the seed's five-point Δ² or better ones) -> binary split into rectangles.
+
+Methods (``method=``)
+---------------------
+``"paper"``     faithful seed 002: |Δ²z'| = |4z'(i,j) - z'(i,j-1) - z'(i,j+1) - z'(i-1,j) - z'(i+1,j)|
+                against the threshold, and the seed's scan-from-the-sides binary split.
+``"separate"``  as ``"paper"`` with max(|∂²/∂u²|, |∂²/∂v²|, |∂²/∂u∂v|) instead of the Laplacian,
+                which also sees harmonic saddles (z' ∝ u² − v² has Δ² = 0 but ∂²/∂u² = 2).
+``"edge"``      (default) edge-aware and error-bounded: break edges *between* pixels where a depth
+                step or crease lies (one-sided stencils keep pixels on a plane next to an edge
+                planar), splits along the grid line holding most break edges, and a rectangle
+                is accepted only when the least-squares plane over it reproduces every pixel's z'
+                within the tolerance — the same plane the mesh uses, so the bound is guaranteed.
+
+Near/far and thresholds
+-----------------------
+z' = 2^24 f/(f-n) (1 - n/z) is affine in 1/z, so *which* pixels are planar does not depend on the
+near/far planes, but the size of a threshold in z' units does. When ``near``/``far`` are not given
+they are the smallest and largest valid depth of the view (far = 2 near for a constant depth), so
+that z' spans the full 24-bit range over the view, like a z-buffer with tight clip planes: a
+threshold of 2^15 is then 1/512 of the view's z' range, as in the seed.
+
+Error bound (``max_error_px``)
+------------------------------
+Moving the camera sideways by a baseline b shifts a pixel of depth z by f·b/z pixels, so an error
+δ(1/z) in inverse depth moves it by f·b·δ(1/z) (for a forward move by b, (r)·b·δ(1/z) with r the
+distance from the principal point, <= f·b·δ(1/z) for fields of view up to 90°). A plane fit whose
+max |residual in 1/z| <= tol therefore keeps the reprojection error <= f·b·tol pixels:
+``tol = max_error_px / (f · b)``. In z' units tol_z' = tol · 2^24 f n/(f - n). The default baseline
+is 5% of the median valid depth.
+
+Pixels: (u, v) = (column, row), centers at integers; a rect ``[u0, v0, u1, v1]`` covers columns
+u0..u1-1 and rows v0..v1-1 (e.g. [0, 0, 2, 1] is pixels (0, 0) and (1, 0)).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _segment_kernels as _k
+from ._validate import check_array, check_choice, check_positive
+from .depth import ZPRIME_SCALE, zprime_from_z
+
+__all__ = [
+    "METHODS",
+    "DEFAULT_METHOD",
+    "DEFAULT_MAX_ERROR_PX",
+    "DEFAULT_BASELINE_FRACTION",
+    "Segmentation",
+    "auto_near_far",
+    "break_edges",
+    "delta2",
+    "planarity_measure",
+    "segment",
+    "split_rects",
+    "tolerance_from_error_px",
+    "zprime",
+]
+
+METHODS = ("edge", "separate", "paper")
+DEFAULT_METHOD = "edge"
+DEFAULT_MAX_ERROR_PX = 0.5
+DEFAULT_BASELINE_FRACTION = 0.05
+
+
+# ------------------------------------------------------------------ z'
+
+
+def _depth(name: str, depth) -> np.ndarray:
+    z = check_array(name, depth, ndim=2, dtype_kind="fiu")
+    if z.shape[0] < 1 or z.shape[1] < 1:
+        raise ValueError(f"{name}: expected a non-empty (H, W) array, got shape {z.shape}")
+    z = z.astype(np.float64)
+    with np.errstate(invalid="ignore"):
+        z[~(np.isfinite(z) & (z > 0))] = np.nan
+    return z
+
+
+def auto_near_far(depth) -> tuple[float, float]:
+    """Near/far for z' from a view's valid depth range: (min z, max z); far = 2·near if constant.
+
+    Raises ``ValueError`` when the depth has no valid pixel.
+    """
+    z = _depth("depth", depth)
+    if not np.isfinite(z).any():
+        raise ValueError("depth: no valid pixel (all NaN, inf or <= 0)")
+    n, f = float(np.nanmin(z)), float(np.nanmax(z))
+    if not f > n * (1 + 1e-9):
+        f = 2.0 * n
+    return n, f
+
+
+def zprime(depth, *, near: float | None = None, far: float | None = None) -> tuple[np.ndarray, float, float]:
+    """Seed 002 eq. 2 nonlinear depth z' = 2^24 f/(f-n) (1 - n/z), float64, NaN where invalid.
+
+    Returns ``(zp, near, far)``; near/far default to :func:`auto_near_far`.
+    """
+    z = _depth("depth", depth)
+    if near is None or far is None:
+        n0, f0 = auto_near_far(z)
+        near = n0 if near is None else near
+        far = f0 if far is None else far
+    near = check_positive("near", near)
+    far = check_positive("far", far, allow_inf=True)
+    if not far > near:
+        raise ValueError(f"far: expected far > near, got near={near}, far={far}")
+    return zprime_from_z(z, near=near, far=far), near, far
+
+
+def zprime_per_inv_depth(near: float, far: float) -> float:
+    """|dz'/d(1/z)| = 2^24 f n / (f - n) (= 2^24 n for an infinite far plane)."""
+    ratio = 1.0 if np.isinf(far) else far / (far - near)
+    return ZPRIME_SCALE * ratio * near
+
+
+# ------------------------------------------------------------------ measures
+
+
+def delta2(zp) -> np.ndarray:
+    """Seed 002 Δ² buffer (signed): 4z'(i,j) - z'(i,j-1) - z'(i,j+1) - z'(i-1,j) - z'(i+1,j).
+
+    Plain numpy. NaN at invalid pixels. An axis whose stencil leaves the image or touches an
+    invalid pixel contributes 0, so a plane's border pixels read 0 too.
+    """
+    z = check_array("zp", zp, ndim=2, dtype_kind="f").astype(np.float64)
+    pad = np.pad(z, 1, constant_values=np.nan)
+    c = pad[1:-1, 1:-1]
+    tu = 2 * c - pad[1:-1, :-2] - pad[1:-1, 2:]
+    tv = 2 * c - pad[:-2, 1:-1] - pad[2:, 1:-1]
+    out = np.nan_to_num(tu, nan=0.0) + np.nan_to_num(tv, nan=0.0)
+    out[~np.isfinite(z)] = np.nan
+    return out
+
+
+def _laplacian_measure_reference(zp):
+    d = np.abs(delta2(zp))
+    d[np.isnan(d)] = np.inf
+    return d
+
+
+def _separate_measure_reference(zp):
+    z = np.asarray(zp, np.float64)
+    pad = np.pad(z, 1, constant_values=np.nan)
+    c = pad[1:-1, 1:-1]
+    tu = np.abs(2 * c - pad[1:-1, :-2] - pad[1:-1, 2:])
+    tv = np.abs(2 * c - pad[:-2, 1:-1] - pad[2:, 1:-1])
+    tm = 0.25 * np.abs(pad[2:, 2:] - pad[:-2, 2:] - pad[2:, :-2] + pad[:-2, :-2])
+    out = np.nan_to_num(np.fmax(np.fmax(tu, tv), tm), nan=0.0)
+    out[~np.isfinite(z)] = np.inf
+    return out
+
+
+def planarity_measure(zp, *, method: str = "paper") -> np.ndarray:
+    """Per-pixel non-planarity of z' (>= 0, +inf at invalid pixels), numba kernel.
+
+    ``method="paper"``: |Δ²z'| (:func:`delta2`); ``"separate"``: max(|∂²/∂u²|, |∂²/∂v²|,
+    |∂²/∂u∂v|) with centered stencils, the mixed one ``(z'(u+1,v+1) - z'(u+1,v-1) - z'(u-1,v+1) +
+    z'(u-1,v-1)) / 4``.
+    """
+    check_choice("method", method, ("paper", "separate"))
+    z = np.ascontiguousarray(check_array("zp", zp, ndim=2, dtype_kind="f"), dtype=np.float64)
+    return _k.laplacian_measure(z) if method == "paper" else _k.separate_measure(z)
+
+
+def _edge_line_reference(z, thr):
+    n = len(z)
+    out = np.zeros(max(n - 1, 0), np.uint8)
+    fin = np.isfinite(z)
+
+    def state(i):  # 0 unavailable, 1 straight, 2 bent (centered stencil at i)
+        if i < 1 or i > n - 2 or not (fin[i - 1] and fin[i] and fin[i + 1]):
+            return 0
+        return 2 if abs(z[i - 1] - 2 * z[i] + z[i + 1]) > thr else 1
+
+    for i in range(n - 1):
+        if fin[i] != fin[i + 1]:
+            out[i] = 1
+        elif fin[i]:
+            ci, cj = state(i), state(i + 1)
+            if 2 in (ci, cj) and 1 not in (ci, cj):
+                out[i] = 1
+            elif ci == 2 and cj == 1 and state(i - 1) == 1:
+                out[i] = 1
+    return out
+
+
+def _break_edges_reference(zp, thr):
+    z = np.asarray(zp, np.float64)
+    h, w = z.shape
+    hb = np.zeros((h, max(w - 1, 0)), np.uint8)
+    vb = np.zeros((max(h - 1, 0), w), np.uint8)
+    for v in range(h):
+        hb[v] = _edge_line_reference(z[v], thr)
+    for u in range(w):
+        vb[:, u] = _edge_line_reference(z[:, u], thr)
+    return hb, vb
+
+
+def break_edges(zp, threshold: float) -> tuple[np.ndarray, np.ndarray]:
+    """Break edges between 4-neighbors of z' for the edge-aware criterion (numba kernel).
+
+    Returns ``hb`` (H, W-1) uint8, 1 where pixels (u, v) and (u+1, v) are separated, and ``vb``
+    (H-1, W) uint8 for (u, v) and (u, v+1). Along a line, pair (i, i+1) is a break when exactly one
+    of them is valid; when every available centered second difference straddling it (at i and at
+    i+1) exceeds ``threshold`` (a step or crease between them); or when the stencil at i is bent
+    while both one-sided stencils at i are straight (a crease at i; pixel i joins the low side).
+    """
+    z = np.ascontiguousarray(check_array("zp", zp, ndim=2, dtype_kind="f"), dtype=np.float64)
+    thr = float(threshold)
+    if not thr >= 0:
+        raise ValueError(f"threshold: expected a number >= 0, got {threshold!r}")
+    return _k.edge_breaks(z, thr)
+
+
+# ------------------------------------------------------------------ split: references
+
+
+def _split_pixels_reference(bad, invalid, min_band, first_dir):
+    """Plain-Python seed 002 binary split; same output order as the numba kernel."""
+    bad = np.asarray(bad, bool)
+    invalid = np.asarray(invalid, bool)
+    h, w = bad.shape
+    out = []
+    stack = [(0, 0, w, h, first_dir)]
+    while stack:
+        u0, v0, u1, v1, d = stack.pop()
+        area = (u1 - u0) * (v1 - v0)
+        if invalid[v0:v1, u0:u1].all():
+            continue
+        if area == 1 or not bad[v0:v1, u0:u1].any():
+            out.append((u0, v0, u1, v1))
+            continue
+        if d == 0 and u1 - u0 < 2:
+            d = 1
+        elif d == 1 and v1 - v0 < 2:
+            d = 0
+        block = bad[v0:v1, u0:u1]
+        lines = block.any(axis=0) if d == 0 else block.any(axis=1)
+        lo, hi = (u0, u1) if d == 0 else (v0, v1)
+        first = int(np.argmax(lines))  # a bad line exists
+        last = len(lines) - 1 - int(np.argmax(lines[::-1]))
+        if first >= min_band:
+            s = lo + first
+        elif len(lines) - 1 - last >= min_band:
+            s = lo + last + 1
+        else:
+            s = lo + (hi - lo) // 2
+        if d == 0:
+            stack += [(s, v0, u1, v1, 1), (u0, v0, s, v1, 1)]
+        else:
+            stack += [(u0, s, u1, v1, 0), (u0, v0, u1, s, 0)]
+    return np.array(out, np.int32).reshape(-1, 4)
+
+
+def _fit_max_residual_reference(zp, u0, v0, u1, v1):
+    block = zp[v0:v1, u0:u1]
+    v, u = np.mgrid[v0:v1, u0:u1].astype(np.float64)
+    a = np.stack([u.ravel(), v.ravel(), np.ones(u.size)], 1)
+    coef, *_ = np.linalg.lstsq(a, block.ravel(), rcond=None)
+    return float(np.abs(a @ coef - block.ravel()).max())
+
+
+def _split_edges_reference(zp, invalid, hb, vb, tol, first_dir):
+    """Plain-Python edge-aware split; same output order as the numba kernel."""
+    zp = np.asarray(zp, np.float64)
+    invalid = np.asarray(invalid, bool)
+    h, w = zp.shape
+    out = []
+    stack = [(0, 0, w, h, first_dir)]
+    while stack:
+        u0, v0, u1, v1, d = stack.pop()
+        if invalid[v0:v1, u0:u1].all():
+            continue
+        cols = hb[v0:v1, u0 : u1 - 1].sum(axis=0)  # breaks across line k = u0 + 1 + index
+        rows = vb[v0 : v1 - 1, u0:u1].sum(axis=1)
+        if cols.sum() + rows.sum() > 0:
+            if d == 0 and cols.sum() == 0:
+                d = 1
+            elif d == 1 and rows.sum() == 0:
+                d = 0
+            counts = cols if d == 0 else rows
+            lo, hi = (u0, u1) if d == 0 else (v0, v1)
+            ks = np.arange(lo + 1, hi)
+            dist = np.abs(2 * ks - (lo + hi))
+            best = counts.max()
+            cand = ks[counts == best]
+            s = int(cand[np.argmin(dist[counts == best])])
+        else:
+            area = (u1 - u0) * (v1 - v0)
+            if area == 1 or _fit_max_residual_reference(zp, u0, v0, u1, v1) <= tol:
+                out.append((u0, v0, u1, v1))
+                continue
+            if u1 - u0 >= v1 - v0:
+                d, s = 0, u0 + (u1 - u0) // 2
+            else:
+                d, s = 1, v0 + (v1 - v0) // 2
+        if d == 0:
+            stack += [(s, v0, u1, v1, 1), (u0, v0, s, v1, 1)]
+        else:
+            stack += [(u0, s, u1, v1, 0), (u0, v0, u1, s, 0)]
+    return np.array(out, np.int32).reshape(-1, 4)
+
+
+# ------------------------------------------------------------------ split: public
+
+
+def split_rects(
+    zp,
+    *,
+    method: str = DEFAULT_METHOD,
+    threshold: float,
+    tolerance: float | None = None,
+    min_band: int = 1,
+    reference: bool = False,
+) -> np.ndarray:
+    """Binary split of a z' buffer into rects (Q, 4) int32 ``[u0, v0, u1, v1]`` (half-open).
+
+    Parameters
+    ----------
+    zp : (H, W) float
+        Nonlinear depth z' (:func:`zprime`), NaN where invalid. Invalid pixels belong to no rect.
+    method : {"edge", "separate", "paper"}
+        See the module docstring.
+    threshold : float
+        Per-pixel threshold in z' units: on |Δ²| (``paper``), on the largest separate second
+        difference (``separate``), or on the second differences that mark break edges (``edge``).
+    tolerance : float, optional
+        ``edge`` only: max |residual| in z' units of a rect's least-squares plane (default:
+        ``threshold``).
+    min_band : int
+        ``paper``/``separate``: the "large enough" scanned band of the seed, in lines (>= 1).
+    reference : bool
+        Use the plain-Python reference implementation (slow; for tests).
+
+    The first split is along a vertical line (scanning columns), then directions alternate.
+    """
+    check_choice("method", method, METHODS)
+    z = np.ascontiguousarray(check_array("zp", zp, ndim=2, dtype_kind="f"), dtype=np.float64)
+    thr = float(threshold)
+    if not thr >= 0:
+        raise ValueError(f"threshold: expected a number >= 0 (z' units), got {threshold!r}")
+    if isinstance(min_band, bool) or int(min_band) != min_band or min_band < 1:
+        raise ValueError(f"min_band: expected an integer >= 1, got {min_band!r}")
+    invalid = (~np.isfinite(z)).astype(np.uint8)
+    if method == "edge":
+        tol = thr if tolerance is None else float(tolerance)
+        if not tol >= 0:
+            raise ValueError(f"tolerance: expected a number >= 0 (z' units), got {tolerance!r}")
+        if reference:
+            hb, vb = _break_edges_reference(z, thr)
+            return _split_edges_reference(z, invalid, hb, vb, tol, 0)
+        hb, vb = _k.edge_breaks(z, thr)
+        return _k.split_edges(z, invalid, hb, vb, tol, 0)
+    if reference:
+        m = _laplacian_measure_reference(z) if method == "paper" else _separate_measure_reference(z)
+        return _split_pixels_reference(m >= thr, invalid, int(min_band), 0)
+    m = _k.laplacian_measure(z) if method == "paper" else _k.separate_measure(z)
+    bad = (m >= thr).astype(np.uint8)
+    return _k.split_pixels(bad, invalid, int(min_band), 0)
+
+
+def tolerance_from_error_px(max_error_px: float, *, focal_px: float, baseline: float) -> float:
+    """Max |error in 1/z| (1/scene units) that keeps reprojection within ``max_error_px``.
+
+    ``tol = max_error_px / (focal_px * baseline)``: a camera move by ``baseline`` shifts a pixel by
+    ``focal_px * baseline / z``, so an error δ(1/z) moves it by ``focal_px * baseline * δ(1/z)``.
+    Example: 0.5 px, f = 1000 px, b = 0.1 m -> 0.005 m^-1.
+    """
+    e = check_positive("max_error_px", max_error_px)
+    f = check_positive("focal_px", focal_px)
+    b = check_positive("baseline", baseline)
+    return e / (f * b)
+
+
+@dataclass(frozen=True, eq=False)
+class Segmentation:
+    """Result of :func:`segment`: rects plus the parameters that produced them.
+
+    ``threshold`` and ``tolerance`` are in z' units; ``tolerance_inv_depth`` is the guaranteed
+    max |plane residual| in 1/z (``edge`` method only, else None); ``seconds`` the wall time of
+    z' + measure + split.
+    """
+
+    rects: np.ndarray
+    zprime: np.ndarray
+    near: float
+    far: float
+    method: str
+    threshold: float
+    tolerance: float | None
+    tolerance_inv_depth: float | None
+    max_error_px: float | None
+    baseline: float | None
+    seconds: float
+
+
+def segment(
+    depth,
+    *,
+    camera=None,
+    threshold: float | None = None,
+    max_error_px: float | None = None,
+    baseline: float | None = None,
+    method: str = DEFAULT_METHOD,
+    near: float | None = None,
+    far: float | None = None,
+    min_band: int = 1,
+) -> Segmentation:
+    """Segment a planar depth map into rectangles that are planar in 1/z.
+
+    Parameters
+    ----------
+    depth : (H, W) array
+        Planar z in scene units; NaN, inf and z <= 0 are invalid and belong to no rect.
+    camera : Camera, optional
+        Needed for ``max_error_px`` (its focal length in pixels).
+    threshold : float, optional
+        Level of detail in z' units (the seed's 2^11 .. 2^15 for 24-bit z'). Exclusive with
+        ``max_error_px``.
+    max_error_px : float, optional
+        Max reprojection error in pixels for a camera move of ``baseline``; converted to a
+        tolerance on 1/z (:func:`tolerance_from_error_px`) and then to z'. Default
+        (neither given): 0.5 px.
+    baseline : float, optional
+        Camera displacement in scene units for ``max_error_px``; default 5% of the median depth.
+    method : {"edge", "separate", "paper"}
+        See the module docstring. With ``max_error_px`` the ``paper``/``separate`` methods use the
+        derived tolerance as their threshold, without a guarantee.
+    near, far : float, optional
+        Clip planes of z'; default: the view's depth range (:func:`auto_near_far`).
+    """
+    check_choice("method", method, METHODS)
+    if threshold is not None and max_error_px is not None:
+        raise ValueError("threshold, max_error_px: give at most one of them")
+    z = check_array("depth", depth, ndim=2, dtype_kind="fiu")
+    if z.shape[0] < 1 or z.shape[1] < 1:
+        raise ValueError(f"depth: expected a non-empty (H, W) array, got shape {z.shape}")
+    if z.dtype not in (np.float32, np.float64):
+        z = z.astype(np.float64)
+    z = np.ascontiguousarray(z)
+    t0 = time.perf_counter()
+    lo, hi, count = _k.valid_range(z)
+    if count == 0 and (near is None or far is None):
+        raise ValueError("depth: no valid pixel (all NaN, inf or <= 0)")
+    if near is None or far is None:
+        if not hi > lo * (1 + 1e-9):
+            hi = 2.0 * lo
+        near = lo if near is None else near
+        far = hi if far is None else far
+    n = check_positive("near", near)
+    f = check_positive("far", far, allow_inf=True)
+    if not f > n:
+        raise ValueError(f"far: expected far > near, got near={near}, far={far}")
+    zp, _invalid = _k.zprime_kernel(z, n, f, ZPRIME_SCALE)
+    scale = zprime_per_inv_depth(n, f)
+    if threshold is None:
+        max_error_px = DEFAULT_MAX_ERROR_PX if max_error_px is None else max_error_px
+        if camera is None:
+            raise ValueError("camera: needed to convert max_error_px to a depth tolerance")
+        if baseline is None:
+            baseline = DEFAULT_BASELINE_FRACTION * _median_depth(z)
+        tol_q = tolerance_from_error_px(max_error_px, focal_px=max(camera.fx, camera.fy), baseline=baseline)
+        thr = tol_q * scale
+    else:
+        thr = check_positive("threshold", threshold)
+    rects = split_rects(zp, method=method, threshold=thr, min_band=min_band)
+    seconds = time.perf_counter() - t0
+    tol = thr if method == "edge" else None
+    return Segmentation(
+        rects=rects,
+        zprime=zp,
+        near=n,
+        far=f,
+        method=method,
+        threshold=thr,
+        tolerance=tol,
+        tolerance_inv_depth=(tol / scale) if tol is not None else None,
+        max_error_px=max_error_px,
+        baseline=baseline,
+        seconds=seconds,
+    )
+
+
+def _median_depth(z) -> float:
+    """Median of the valid depth; images over 2^16 pixels use every 4th row and column (the
+    median of a smooth depth map changes by far less than the 5% baseline it feeds)."""
+    sub = z[::4, ::4] if z.size > 65536 else z
+    with np.errstate(invalid="ignore"):
+        valid = sub[np.isfinite(sub) & (sub > 0)]
+    if valid.size == 0:
+        valid = z[np.isfinite(z) & (z > 0)]
+    if valid.size == 0:
+        raise ValueError("depth: no valid pixel to choose a default baseline from")
+    return float(np.median(valid))
