@@ -232,7 +232,9 @@ def read_image(path, *, what: str = "image") -> np.ndarray:
     if path.suffix.lower() == ".pfm":
         return read_pfm(path)[0]
     oiio = _oiio()
-    inp = oiio.ImageInput.open(str(path))
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)  # return RGBA as stored, not premultiplied
+    inp = oiio.ImageInput.open(str(path), config)
     if inp is None:
         raise ValueError(f"{what}: cannot read {path}: {oiio.geterror() or 'unknown format'}")
     try:
@@ -287,6 +289,7 @@ def write_image(path, array) -> None:
         if out is None:
             raise ValueError(f"array: cannot create a writer for {path}: {oiio.geterror()}")
         spec = oiio.ImageSpec(w, h, c, typedesc)
+        spec.attribute("oiio:UnassociatedAlpha", 1)  # RGBA arrays are straight (not premultiplied)
         if ext in (".jpg", ".jpeg"):
             spec.attribute("Compression", "jpeg:95")
         try:
@@ -623,16 +626,20 @@ def save_view(view: View, path, *, color_name: str | None = None, depth_name: st
     params = _check_depth_params(depth_encoding, dict(depth_params or {}), "depth_params")
     stem = path.stem
     color_name = color_name or f"{stem}_color{_default_color_ext(view.color.dtype)}"
+    names = [path.name, color_name]
+    if view.depth is not None:
+        depth_name = depth_name or f"{stem}_depth{_default_depth_ext(depth_encoding)}"
+        names.append(depth_name)
+    resolved = [(folder / n).resolve() for n in names]
+    if len(set(resolved)) != len(resolved):
+        raise ValueError(f"color_name/depth_name: the JSON, color and depth files must be distinct, got {names}")
+
     color = view.color
     if color.dtype == np.float64:
         color = color.astype(np.float32)
     _check_write_dtype(folder / color_name, color, "color")
-
-    names = [path.name, color_name]
     stored = None
     if view.depth is not None:
-        depth_name = depth_name or f"{stem}_depth{_default_depth_ext(depth_encoding)}"
-        names.append(depth_name)
         stored = _encode_depth(view.depth, depth_encoding, params, view.camera)
         if depth_encoding in _FIXED_BITS:
             if depth_encoding == "fixed24" and Path(depth_name).suffix.lower() == ".png":
@@ -640,9 +647,6 @@ def save_view(view: View, path, *, color_name: str | None = None, depth_name: st
             _check_write_dtype(folder / depth_name, stored, "depth")
         elif Path(depth_name).suffix.lower() == ".png" and "scale" not in params:
             raise ValueError(f"depth_params: a 16-bit PNG depth ({depth_name}) needs a 'scale'")
-    resolved = [(folder / n).resolve() for n in names]
-    if len(set(resolved)) != len(resolved):
-        raise ValueError(f"color_name/depth_name: the JSON, color and depth files must be distinct, got {names}")
 
     doc = view_to_dict(view, color_name=Path(color_name).as_posix(),
                        depth_name=None if stored is None else Path(depth_name).as_posix(),
