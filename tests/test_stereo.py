@@ -1,0 +1,418 @@
+"""Tests of ibr.stereo (seed 000 stereo camera) and ibr.stereo_pair (seed 003 stereo pairs)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ibr import synth
+from ibr._stereo_pair import (
+    fill_rows_background,
+    fill_rows_background_reference,
+    scanline_warp,
+    scanline_warp_reference,
+)
+from ibr.camera import Camera, gl_frustum_from_projection
+from ibr.depth import window_from_z
+from ibr.stereo import (
+    StereoCamera,
+    auto_stereo,
+    comfort,
+    max_interaxial,
+    max_interaxial_for_range,
+    parallax_angle_deg,
+    parallax_px,
+    parallax_scene,
+)
+from ibr.stereo_pair import (
+    DUBOIS_RED_CYAN_LEFT,
+    DUBOIS_RED_CYAN_RIGHT,
+    anaglyph,
+    dubois_anaglyph,
+    fill_background,
+    map_pixels,
+    pack_stereo,
+    stereo_cameras,
+    stereo_pair,
+    stereo_pair_from_zbuffer,
+)
+from ibr.view import View
+
+
+def table1_camera(**kw) -> StereoCamera:
+    """Seed 000 table 1."""
+    args = dict(position=(0, 0, 3.144), view_dir=(0, 0, -3.144), up=(0, 1, 0), interaxial=0.088,
+                focal_distance=3.144, vfov_deg=50.0, near=2.144, far=4.144, width=512, height=512)
+    args.update(kw)
+    return StereoCamera(**args)
+
+
+TABLE2 = {  # object: (position, expected parallax sign)
+    "cube": ((-0.5, 0.5, 0.8), -1),
+    "yellow sphere": ((0.5, 0.5, 0.5), -1),
+    "cone": ((0.0, 0.0, 0.0), 0),
+    "red sphere": ((-0.8, -0.8, -0.5), 1),
+    "teapot": ((0.8, -0.8, -0.8), 1),
+}
+
+
+# ---------------------------------------------------------------------- seed 000
+def test_table1_eye_positions_and_frusta():
+    sc = table1_camera()
+    np.testing.assert_allclose(sc.eye_position("left"), [-0.044, 0, 3.144], atol=1e-15)
+    np.testing.assert_allclose(sc.eye_position("right"), [0.044, 0, 3.144], atol=1e-15)
+    t = 2.144 * np.tan(np.radians(25))
+    shift = 0.088 * 2.144 / (2 * 3.144)
+    fl, fr = sc.gl_frustum("left"), sc.gl_frustum("right")
+    np.testing.assert_allclose([fl.left, fl.right, fl.bottom, fl.top], [-t + shift, t + shift, -t, t], rtol=1e-14)
+    np.testing.assert_allclose([fr.left, fr.right, fr.bottom, fr.top], [-t - shift, t - shift, -t, t], rtol=1e-14)
+    # the GL matrix round-trips through the foundation's frustum recovery
+    back = gl_frustum_from_projection(sc.gl_projection("left"))
+    np.testing.assert_allclose([back.left, back.right, back.near, back.far], [fl.left, fl.right, 2.144, 4.144], rtol=1e-12)
+
+
+def test_table1_cameras_gl_to_cv():
+    sc = table1_camera()
+    left, right = sc.cameras()
+    fpx = 256 / np.tan(np.radians(25))
+    assert left.fx == pytest.approx(fpx, rel=1e-12) and left.fy == pytest.approx(fpx, rel=1e-12)
+    # left frustum shifted to +x: principal point left of center by fx e / 2f
+    assert left.cx == pytest.approx(255.5 - fpx * 0.088 / (2 * 3.144), abs=1e-9)
+    assert right.cx == pytest.approx(255.5 + fpx * 0.088 / (2 * 3.144), abs=1e-9)
+    assert left.cy == right.cy == pytest.approx(255.5, abs=1e-12)
+    # GL world has y up and the camera looks down -z: CV axes x right, y down, z forward
+    np.testing.assert_allclose(left.world_from_cam[:3, :3], np.diag([1.0, -1.0, -1.0]), atol=1e-15)
+    np.testing.assert_allclose(left.position, [-0.044, 0, 3.144], atol=1e-15)
+    # the GL view matrix maps the eye to the origin and V_d to -z
+    v = sc.gl_view("right")
+    np.testing.assert_allclose(v @ [0.044, 0, 3.144, 1], [0, 0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(v[:3, :3] @ [0, 0, -1.0], [0, 0, -1.0], atol=1e-15)
+
+
+def test_table2_parallax_signs():
+    sc = table1_camera()
+    pts = np.array([p for p, _ in TABLE2.values()])
+    par = sc.parallax(pts)
+    for (name, (_, sign)), px, scene in zip(TABLE2.items(), par["px"], par["scene"]):
+        if sign == 0:
+            assert abs(px) < 1e-9, name
+        else:
+            assert np.sign(px) == sign, name
+            assert abs(px) > 1.0, name  # clearly non-zero: more than a pixel
+    np.testing.assert_array_equal(par["vertical_px"], 0.0)
+    # measured by projection == eq. 9 (z > 0 form) in scene units and in pixels
+    z = 3.144 - pts[:, 2]
+    np.testing.assert_allclose(par["z"], z, atol=1e-15)
+    np.testing.assert_allclose(par["scene"], parallax_scene(z, e=0.088, f=3.144), atol=1e-12)
+    np.testing.assert_allclose(par["px"], parallax_px(z, e=0.088, f=3.144, focal_px=sc.focal_px), atol=1e-9)
+    # seed convention: P_h = e (1 + f / z_gl) with z_gl = -z
+    np.testing.assert_allclose(par["scene"], 0.088 * (1 + 3.144 / -z), atol=1e-12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(-1, 1), st.floats(-1, 1), st.floats(0.2, 1), st.floats(-0.5, 0.5), st.floats(-0.5, 0.5),
+       st.floats(0.01, 0.5))
+def test_no_vertical_parallax_any_orientation(dx, dy, dz, ux, uz, e):
+    d = np.array([dx, dy, -dz])
+    up = np.array([ux, 1.0, uz])
+    if np.linalg.norm(np.cross(d, up)) < 1e-3:
+        return
+    sc = StereoCamera((0.3, -0.2, 1.0), d, up, e, 2.0, 50.0, 0.1, 100.0, 320, 240)
+    rng = np.random.default_rng(0)
+    left = sc.camera("left")
+    pts = left.unproject(rng.uniform([0, 0], [320, 240], (50, 2)), rng.uniform(0.5, 20, 50))
+    par = sc.parallax(pts)
+    assert np.max(np.abs(par["vertical_px"])) < 1e-9
+    # the zero-parallax plane: points at depth f from V_p
+    pts_f = sc.position + sc.focal_distance * sc.view_dir + rng.normal(size=(10, 1)) * np.cross(sc.view_dir, sc.up) * 0.3
+    assert np.max(np.abs(sc.parallax(pts_f)["px"])) < 1e-9
+
+
+def test_comfort_limits_and_seed_error():
+    f = 3.144
+    assert max_interaxial(f) / f == pytest.approx(2 * np.tan(np.radians(0.8)), rel=1e-14)
+    assert max_interaxial(f) / f == pytest.approx(0.0279, abs=5e-5)  # the seed's 0.028 f
+    assert max_interaxial(f, max_angle_deg=1.5) / f == pytest.approx(0.0262, abs=5e-5)  # not 0.028
+    e = max_interaxial(f)
+    # over [f/2, inf) the extreme parallax is exactly the limit angle on both sides
+    assert parallax_angle_deg(parallax_scene(f / 2, e=e, f=f), f=f) == pytest.approx(-1.6, abs=1e-12)
+    assert parallax_angle_deg(e, f=f) == pytest.approx(1.6, abs=1e-12)
+    rep = comfort(f / 2, np.inf, e=e, f=f)
+    assert rep.ok and rep.max_angle_deg == pytest.approx(1.6)
+    assert not comfort(f / 2 * 0.99, 10, e=0.5 * e, f=f).ok  # nearest object closer than f/2
+    assert not comfort(f / 2, np.inf, e=1.05 * e, f=f).ok
+    # table 1's e = 0.088 is the rounded 0.028 f: just above the exact 1.6 degree limit
+    assert table1_camera().max_parallax_angle_deg(f / 2, np.inf) == pytest.approx(
+        np.degrees(2 * np.arctan(0.088 / (2 * f))), abs=1e-12)
+    assert table1_camera().max_parallax_angle_deg(f / 2, np.inf) > 1.6
+
+
+def test_max_interaxial_for_range_is_tight():
+    zn, zf, f = 2.0, 8.0, 3.0
+    e = max_interaxial_for_range(zn, zf, f, max_angle_deg=1.6)
+    z = np.linspace(zn, zf, 1001)
+    ang = np.abs(parallax_angle_deg(parallax_scene(z, e=e, f=f), f=f))
+    assert ang.max() == pytest.approx(1.6, abs=1e-9)
+
+
+def test_auto_stereo_percentiles_ignore_strays():
+    rng = np.random.default_rng(1)
+    depth = rng.uniform(2.0, 6.0, (100, 100)).astype(np.float32)
+    depth[0, :10] = 0.01  # stray near pixels (0.1 %)
+    depth[1, :10] = 1e4
+    depth[2, :10] = np.nan
+    e, f = auto_stereo(depth, percentiles=(1, 99))
+    zn, zf = np.percentile(depth[np.isfinite(depth)], [1, 99])
+    assert zn > 1.9 and zf < 6.1
+    assert f == pytest.approx(2 / (1 / zn + 1 / zf), rel=1e-12)
+    assert f <= 2 * zn  # nearest object no closer than f / 2
+    rep = comfort(zn, zf, e=e, f=f)
+    assert rep.ok and rep.max_angle_deg == pytest.approx(1.6, abs=1e-9)
+    assert rep.crossed_angle_deg == pytest.approx(-rep.uncrossed_angle_deg, abs=1e-9)  # balanced
+    e2, f2 = auto_stereo(depth, mode="seed")
+    assert f2 == pytest.approx(2 * zn) and e2 == pytest.approx(max_interaxial(f2))
+
+
+def test_stereo_camera_bad_input():
+    with pytest.raises(ValueError, match="up: must not be parallel"):
+        table1_camera(up=(0, 0, 1))
+    with pytest.raises(ValueError, match="vfov_deg"):
+        table1_camera(vfov_deg=180)
+    with pytest.raises(ValueError, match="far: expected far > near"):
+        table1_camera(far=1.0)
+    with pytest.raises(ValueError, match="interaxial"):
+        table1_camera(interaxial=-0.1)
+    with pytest.raises(ValueError, match="eye: expected one of"):
+        table1_camera().camera("middle")
+    with pytest.raises(ValueError, match="depth: no valid"):
+        auto_stereo(np.full((4, 4), np.nan))
+    with pytest.raises(ValueError, match="percentiles"):
+        auto_stereo(np.ones((4, 4)), percentiles=(50, 10))
+
+
+# ---------------------------------------------------------------------- seed 003 method 2
+def _plane_view(w=64, h=48, z0=4.0, slope=0.0, texture="ramp"):
+    cam = Camera.from_fov(w, h, hfov_deg=60)
+    u, v = cam.pixel_grid()
+    # plane z with 1/z affine in u: 1/z = 1/z0 + slope * (u - cx)
+    z = (1.0 / (1.0 / z0 + slope * (u - cam.cx))).astype(np.float32)
+    if texture == "ramp":
+        col = np.stack([u / w, v / h, 0.5 + 0 * u], -1).astype(np.float32)
+    else:
+        col = (0.5 + 0.4 * np.sin(0.7 * u)[..., None] * np.ones(3)).astype(np.float32)
+    return View(col, z, cam)
+
+
+def test_map_pixels_plane_exact_and_half_pixel():
+    """A fronto-parallel plane shifts by exactly -fx dx / z + dpixel pixels."""
+    view = _plane_view(texture="sine")
+    fx = view.camera.fx
+    dx = 0.5 * 4.0 / fx  # half a pixel of parallax
+    lay = map_pixels(view, dx=dx, dpixel=3.0)
+    shift = 3.0 - 0.5
+    # analytic: the target pixel j shows the source at j - shift (a sine sampled off-grid)
+    j = np.arange(64)
+    expect = 0.5 + 0.4 * np.sin(0.7 * (j - shift))
+    inner = (j - shift >= 0) & (j - shift <= 63)
+    err = np.abs(lay.color[:, inner, 0] - expect[inner])
+    # linear interpolation of sin(0.7 u) at a half-pixel offset: error <= 0.4 * 0.7^2 / 8 = 0.0245
+    assert err.max() <= 0.4 * 0.7**2 / 8 + 1e-6
+    # a half-pixel mistake would be ~0.4 * 0.7 * 0.5 = 0.14 off at the steepest points
+    wrong = np.abs(lay.color[:, inner, 0] - (0.5 + 0.4 * np.sin(0.7 * (j[inner] - shift + 0.5))))
+    assert wrong.max() > 0.1
+    np.testing.assert_allclose(lay.depth[:, inner], 4.0, rtol=1e-6)
+    assert not lay.coverage[:, :2].any() and lay.coverage[:, 3:].all()  # 2.5 px exposed on the left
+
+
+def test_map_pixels_integer_shift_is_exact_copy():
+    view = _plane_view()
+    lay = map_pixels(view, dx=0.0, dpixel=1.0)
+    np.testing.assert_array_equal(lay.color[:, 1:], view.color[:, :-1])
+    assert not lay.coverage[:, 0].any()
+
+
+def test_scanline_kernel_matches_reference():
+    rng = np.random.default_rng(3)
+    h, w = 6, 40
+    z = rng.uniform(1.0, 3.0, (h, w)).astype(np.float32)
+    z[:, 10:18] = 0.6  # a foreground bar: occlusion and disocclusion
+    z[2, 25] = np.nan
+    color = rng.uniform(0, 1, (h, w, 3)).astype(np.float32)
+    for dx, dp in ((0.02, 0.3), (-0.03, -1.7)):
+        ref_c, ref_z, ref_cov = scanline_warp_reference(color, z, 50.0, dx, dp, 1.0)
+        c = np.zeros_like(color)
+        d = np.full((h, w), np.inf, np.float32)
+        cov = np.zeros((h, w), bool)
+        scanline_warp(color, z, 50.0, dx, dp, 1.0, c, d, cov)
+        np.testing.assert_array_equal(cov, ref_cov)
+        np.testing.assert_allclose(d[cov], ref_z[cov], rtol=1e-5)
+        np.testing.assert_allclose(c[cov], ref_c[cov], atol=1e-5)
+
+
+def test_fill_background_matches_reference_and_takes_far_side():
+    rng = np.random.default_rng(4)
+    color = rng.uniform(0, 1, (5, 30, 3)).astype(np.float32)
+    depth = rng.uniform(1, 5, (5, 30)).astype(np.float32)
+    cov = rng.uniform(size=(5, 30)) > 0.3
+    cov[4] = False
+    ref = fill_rows_background_reference(color, depth, cov)
+    c, d, holes = fill_background(color, depth, cov)
+    np.testing.assert_array_equal(holes, ref[2])
+    np.testing.assert_array_equal(c, ref[0])
+    np.testing.assert_array_equal(d[cov[...]] , ref[1][cov])
+    # explicit case: hole between near (z=1) and far (z=5) takes the far color
+    col = np.zeros((1, 5, 3), np.float32)
+    col[0, 0], col[0, 4] = 0.2, 0.9
+    dep = np.array([[1.0, 0, 0, 0, 5.0]], np.float32)
+    cv = np.array([[True, False, False, False, True]])
+    c, d, holes = fill_background(col, dep, cv)
+    np.testing.assert_allclose(c[0, 1:4], 0.9)
+    np.testing.assert_allclose(d[0, 1:4], 5.0)
+    assert holes[0].tolist() == [False, True, True, True, False]
+
+
+def test_stereo_cameras_sources():
+    cam = Camera.from_fov(64, 48, hfov_deg=60)
+    for source in ("center", "left", "right"):
+        l, r = stereo_cameras(cam, e=0.1, f=2.0, source=source)
+        assert r.cx - l.cx == pytest.approx(cam.fx * 0.1 / 2.0, abs=1e-12)
+        np.testing.assert_allclose(r.position - l.position, [0.1, 0, 0], atol=1e-15)
+        assert l.cy == r.cy == cam.cy
+    l, r = stereo_cameras(cam, e=0.1, f=2.0, source="left")
+    assert l is cam
+
+
+@pytest.mark.parametrize("name", ["room", "clutter", "grazing"])
+def test_stereo_pair_matches_ground_truth(name):
+    """Method 2 pair vs ray-traced eye cameras: PSNR >= 35 dB outside disocclusions."""
+    scene = synth.make_scene(name)
+    cam, _ = synth.scene_cameras(name, width=256, height=192)
+    view = synth.render(scene, cam, supersample=3)
+    e, f = auto_stereo(view.depth)
+    pair = stereo_pair(view, e=e, f=f)
+    for img, holes, ecam in ((pair.left, pair.left_holes, pair.left_camera),
+                             (pair.right, pair.right_holes, pair.right_camera)):
+        gt = synth.render(scene, ecam, supersample=3)
+        ok = ~holes & np.isfinite(gt.depth)
+        assert holes.mean() < 0.08
+        psnr = 10 * np.log10(1 / np.mean((img[ok] - gt.color[ok]) ** 2))
+        assert psnr >= 35.0, psnr
+        # geometry: depth of every non-hole pixel equals the ray-traced depth (edge pixels aside)
+        dz = np.abs((pair.left_depth if img is pair.left else pair.right_depth)[ok] - gt.depth[ok]) / gt.depth[ok]
+        assert np.percentile(dz, 95) < 1e-3
+
+
+def test_stereo_pair_vertical_parallax_zero_and_kept_eye():
+    view = _plane_view(slope=0.002)
+    pair = stereo_pair(view, e=0.1, f=4.0, source="left")
+    np.testing.assert_array_equal(pair.left, view.color)
+    assert not pair.left_holes.any()
+    # every row of the right image is built from the same row of the source: a source whose
+    # rows are constant colors gives constant rows in the output
+    col = np.repeat(np.linspace(0, 1, 48, dtype=np.float32)[:, None, None], 64, 1).repeat(3, 2)
+    v2 = View(col, view.depth, view.camera)
+    p2 = stereo_pair(v2, e=0.1, f=4.0)
+    np.testing.assert_array_equal(p2.left, col)
+    np.testing.assert_array_equal(p2.right, col)
+
+
+def test_stereo_pair_dtype_and_splat():
+    view = _plane_view()
+    u8 = View((view.color * 255).round().astype(np.uint8), view.depth, view.camera)
+    pair = stereo_pair(u8, e=0.05, f=4.0)
+    assert pair.left.dtype == np.uint8 and pair.left.shape == (48, 64, 3)
+    sp = stereo_pair(view, e=0.05, f=4.0, method="splat")
+    # a fronto-parallel plane at z = f has zero parallax: both eyes see the source (integer copy)
+    np.testing.assert_array_equal(sp.left, view.color)
+    np.testing.assert_array_equal(sp.right, view.color)
+
+
+def test_stereo_pair_from_zbuffer_matches_view_path():
+    view = _plane_view(slope=0.001)
+    cam = view.camera
+    near, far = 1.0, 50.0
+    proj = cam.gl_projection(near, far)
+    wbuf = window_from_z(view.depth, near=near, far=far)
+    wbuf[0, :5] = 1.0  # cleared background
+    a = stereo_pair_from_zbuffer(view.color, wbuf, proj, e=0.05, f=4.0)
+    depth = view.depth.copy()
+    depth[0, :5] = np.nan
+    b = stereo_pair(View(view.color, depth, cam), e=0.05, f=4.0)
+    np.testing.assert_allclose(a.left, b.left, atol=1e-5)
+    np.testing.assert_allclose(a.right, b.right, atol=1e-5)
+    assert a.left_camera.allclose(b.left_camera, atol=1e-9)
+
+
+def test_stereo_pair_bad_input():
+    view = _plane_view()
+    with pytest.raises(ValueError, match="method: expected one of"):
+        stereo_pair(view, e=0.1, f=2, method="magic")
+    with pytest.raises(ValueError, match="needs depth"):
+        stereo_pair(View(view.color, None, view.camera), e=0.1, f=2)
+    with pytest.raises(ValueError, match="f: expected a positive"):
+        stereo_pair(view, e=0.1, f=0)
+    with pytest.raises(ValueError, match="dz: method 'pixel'"):
+        map_pixels(view, dx=0.1, dz=0.2)
+    with pytest.raises(ValueError, match="zbuffer: expected shape"):
+        stereo_pair_from_zbuffer(view.color, np.zeros((3, 3)), view.camera.gl_projection(1, 10), e=0.1, f=2)
+
+
+# ---------------------------------------------------------------------- packing
+def _pair_u8():
+    rng = np.random.default_rng(5)
+    return (rng.integers(0, 256, (6, 8, 3), dtype=np.uint8), rng.integers(0, 256, (6, 8, 3), dtype=np.uint8))
+
+
+def test_pack_modes_layout():
+    l, r = _pair_u8()
+    assert pack_stereo(l, r, "separate")[1] is r
+    sbs = pack_stereo(l, r, "sbs")
+    np.testing.assert_array_equal(sbs[:, :8], l)
+    np.testing.assert_array_equal(sbs[:, 8:], r)
+    tb = pack_stereo(l, r, "tb")
+    np.testing.assert_array_equal(tb[:6], l)
+    np.testing.assert_array_equal(tb[6:], r)
+    il = pack_stereo(l, r, "interleaved")
+    np.testing.assert_array_equal(il[0::2], l[0::2])
+    np.testing.assert_array_equal(il[1::2], r[1::2])
+    half = pack_stereo(l, r, "sbs-half")
+    assert half.shape == l.shape
+    # area filter: each output pixel is the mean of two input columns
+    np.testing.assert_allclose(half[:, :4].astype(float), (l[:, 0::2].astype(float) + l[:, 1::2]) / 2, atol=0.51)
+    th = pack_stereo(l, r, "tb-half")
+    np.testing.assert_allclose(th[3:].astype(float), (r[0::2].astype(float) + r[1::2]) / 2, atol=0.51)
+    with pytest.raises(ValueError, match="mode: expected one of"):
+        pack_stereo(l, r, "checkerboard")
+    with pytest.raises(ValueError, match="right: expected shape"):
+        pack_stereo(l, r[:, :4], "sbs")
+
+
+def test_anaglyph_channels():
+    l, r = _pair_u8()
+    a = anaglyph(l, r)
+    np.testing.assert_array_equal(a[..., 0], l[..., 0])
+    np.testing.assert_array_equal(a[..., 1:], r[..., 1:])
+
+
+def test_dubois_anaglyph():
+    # rows of A_l + A_r sum to 1: a gray pair at zero parallax stays gray (linear light)
+    np.testing.assert_allclose((DUBOIS_RED_CYAN_LEFT + DUBOIS_RED_CYAN_RIGHT).sum(1), 1.0, atol=1.5e-3)
+    gray = np.full((4, 4, 3), 0.5, np.float32)
+    out = dubois_anaglyph(gray, gray)
+    np.testing.assert_allclose(out, 0.5, atol=2e-3)
+    # in linear light, a pure left-red pixel projects to the matrix column (clipped at 0)
+    lr = np.zeros((1, 1, 3))
+    lr[..., 0] = 1.0
+    out = dubois_anaglyph(lr, np.zeros_like(lr), linear_input=True)
+    np.testing.assert_allclose(out[0, 0], np.clip(DUBOIS_RED_CYAN_LEFT[:, 0], 0, 1), atol=1e-12)
+    l, r = _pair_u8()
+    ref = np.clip(_lin(l) @ DUBOIS_RED_CYAN_LEFT.T + _lin(r) @ DUBOIS_RED_CYAN_RIGHT.T, 0, 1)
+    got = _lin(dubois_anaglyph(l, r))
+    assert np.max(np.abs(got - ref)) < 0.01  # 8-bit rounding in sRGB
+
+
+def _lin(u8):
+    x = u8.astype(np.float64) / 255
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
