@@ -1,0 +1,102 @@
+"""Photosphere viewer: turning tours and a local WebGL page fed by cube faces.
+
+* :func:`tour_views` renders N perspective views turning once around the vertical axis.
+* :func:`write_site` writes the static page (``panorama/web/index.html``) next to six 8-bit face
+  files ``px.png .. nz.png`` (canonical orientation, :mod:`panorama.directions`).
+* :func:`serve` serves such a folder on 127.0.0.1 only (``http.server``) from a background
+  thread; the caller stops it with ``server.shutdown()``.
+
+The page renders every pixel's ray exactly like :func:`panorama.perspective` (pixel centres at
+integers, ``fov`` across the full width) and takes ``?yaw=&pitch=&roll=&fov=`` in the URL;
+drag to look, scroll to zoom.
+"""
+
+from __future__ import annotations
+
+import functools
+import http.server
+import shutil
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from .convert import equirect_to_cubemap, perspective
+from .files import write_cubemap
+from .layouts import unpack_faces
+
+__all__ = ["WEB_DIR", "serve", "site_url", "to_uint8", "tour_views", "write_site"]
+
+WEB_DIR = Path(__file__).with_name("web")
+
+
+def to_uint8(img: np.ndarray) -> np.ndarray:
+    """8-bit copy for display: uint16 scaled by 1/257, floats clipped to [0, 1] and scaled by 255."""
+    if img.dtype == np.uint8:
+        return img
+    if img.dtype == np.uint16:
+        return ((img.astype(np.uint32) + 128) // 257).astype(np.uint8)
+    if img.dtype.kind == "f":
+        return np.clip(np.rint(np.nan_to_num(img) * 255.0), 0, 255).astype(np.uint8)
+    raise TypeError(f"image: cannot display dtype {img.dtype}")
+
+
+def tour_views(pano, n: int, *, pitch_deg: float = 0.0, fov_deg: float = 90.0, width: int = 640,
+               height: int = 360, layout: str | None = None, start_yaw_deg: float = 0.0):
+    """Yield ``n`` perspective views at yaw = start + 360 k / n (k = 0..n-1)."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n: expected a positive integer number of frames, got {n!r}")
+    for k in range(n):
+        yield perspective(pano, yaw_deg=start_yaw_deg + 360.0 * k / n, pitch_deg=pitch_deg,
+                          fov_deg=fov_deg, width=width, height=height, layout=layout)
+
+
+def write_site(folder, pano, *, layout: str | None = None, face_size: int | None = None) -> Path:
+    """Write ``index.html`` and ``px.png .. nz.png`` into ``folder``; return the page's path.
+
+    ``pano`` is an equirect image (converted to faces of ``face_size``, default width / pi rounded
+    up to a multiple of 8, capped at 2048) or a cubemap in ``layout``.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    if layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
+                                and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
+        if face_size is None:
+            face_size = min(2048, int(np.ceil(pano.shape[1] / np.pi / 8) * 8))
+        faces = equirect_to_cubemap(pano, face_size, layout="list")
+    else:
+        from .convert import detect_layout
+        faces = unpack_faces(pano, layout or detect_layout(pano))
+    faces = [to_uint8(np.ascontiguousarray(f)) for f in faces]
+    write_cubemap(folder, faces, layout="files", ext=".png")
+    page = folder / "index.html"
+    shutil.copyfile(WEB_DIR / "index.html", page)
+    return page
+
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, format, *args):  # noqa: A002 - http.server's signature
+        pass
+
+
+def serve(folder, *, port: int = 0, quiet: bool = True) -> http.server.ThreadingHTTPServer:
+    """Serve ``folder`` on http://127.0.0.1:<port>/ from a daemon thread (port 0 = any free one).
+
+    Returns the running server; ``server.server_address[1]`` is the port, ``server.shutdown()``
+    stops it. Only the loopback interface is bound.
+    """
+    folder = Path(folder)
+    if not (folder / "index.html").is_file():
+        raise FileNotFoundError(f"folder: {folder} has no index.html (write it with write_site)")
+    handler = functools.partial(_QuietHandler if quiet else http.server.SimpleHTTPRequestHandler,
+                                directory=str(folder))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", int(port)), handler)
+    threading.Thread(target=server.serve_forever, daemon=True, name="panorama-viewer").start()
+    return server
+
+
+def site_url(server, *, yaw_deg=0.0, pitch_deg=0.0, roll_deg=0.0, fov_deg=90.0, hud=True) -> str:
+    """URL of the page served by ``server`` at a given view."""
+    port = server.server_address[1]
+    return (f"http://127.0.0.1:{port}/index.html?yaw={yaw_deg:g}&pitch={pitch_deg:g}"
+            f"&roll={roll_deg:g}&fov={fov_deg:g}" + ("" if hud else "&hud=0"))
