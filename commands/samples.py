@@ -1,6 +1,7 @@
 """``ibr samples``: write the bundled sample views to a folder as view files.
 
 Files are named ``<scene>_<view>.json`` (plus the color/depth files they reference); the
+bundled ``manifest.json`` (scene pairs and ground-truth views) is copied alongside; the
 Middlebury pair becomes ``motorcycle_left.json`` (disparity PFM with its calibration) and
 ``motorcycle_right.json`` (color and camera only). Existing files of the same names in the
 output folder are replaced atomically; the bundled data folder itself is refused as output.
@@ -36,6 +37,14 @@ def run(args) -> int:
     bundled = bundled_view_files()
     if bundled:
         written += [copy_view_file(p, out) for p in bundled]
+        manifest = bundled[0].parent / "manifest.json"
+        if manifest.is_file():  # scene pairs and ground-truth views (written by samples/generate.py)
+            import shutil
+
+            from ibr.io import atomic_path
+
+            with atomic_path(out / manifest.name) as tmp:
+                shutil.copyfile(manifest, tmp)
     else:
         info("samples: no bundled synthetic views found in samples/data")
     if not args.no_middlebury:

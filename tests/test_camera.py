@@ -219,6 +219,8 @@ def test_gl_ndc_signs_and_half_pixel():
     z = np.array([1.0, 2.0, 3.0, 10.0, 49.0])
     ndc, wclip = ndc_of(cam, near, far, cam.unproject(uv, z))
     assert np.all(wclip > 0)  # in front of the camera: w_clip = z_cv > 0
+    assert np.all(np.abs(ndc) <= 1 + 1e-12)  # inside the image and between near and far: inside NDC
+    assert np.all((ndc[:, 2] > -1) & (ndc[:, 2] < 1))
     # NDC x = -1 is the left edge of column 0 (u = -0.5); NDC y = +1 the top edge of row 0.
     np.testing.assert_allclose(ndc[:, 0], (2 * uv[:, 0] + 1) / w - 1, atol=1e-12)
     np.testing.assert_allclose(ndc[:, 1], 1 - (2 * uv[:, 1] + 1) / h, atol=1e-12)

@@ -75,7 +75,7 @@ def test_samples_writes_the_middlebury_pair(samples_dir):
 def test_samples_copies_every_bundled_view(samples_dir):
     from samples import DATA_DIR
 
-    bundled = sorted(p.name for p in DATA_DIR.glob("*.json")) if DATA_DIR.is_dir() else []
+    bundled = sorted(p.name for p in DATA_DIR.glob("*.json") if json.loads(p.read_text()).get("format") == "ibr-view")
     for name in bundled:
         assert "_" in Path(name).stem, f"{name}: expected <scene>_<view>.json"
         src, dst = load_view(DATA_DIR / name), load_view(samples_dir / name)
@@ -86,7 +86,8 @@ def test_samples_copies_every_bundled_view(samples_dir):
         else:
             np.testing.assert_array_equal(dst.depth, src.depth)
     names = {p.name for p in samples_dir.glob("*.json")}
-    assert names == set(bundled) | {"motorcycle_left.json", "motorcycle_right.json"}
+    extra = {"manifest.json"} if (DATA_DIR / "manifest.json").is_file() else set()
+    assert names == set(bundled) | {"motorcycle_left.json", "motorcycle_right.json"} | extra
     assert not [p for p in samples_dir.rglob(".*")]  # no temporary files left behind
 
 
