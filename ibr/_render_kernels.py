@@ -1,0 +1,578 @@
+"""numba kernels behind :mod:`ibr.render` and :mod:`ibr.forward` (private; no validation here).
+
+Pixel convention: pixel (u, v) = (column, row), centers at integer coordinates, the image spans
+[-0.5, W - 0.5] x [-0.5, H - 0.5]. Quad rect ``[u0, v0, u1, v1]`` covers source pixels
+``u0 .. u1-1`` x ``v0 .. v1-1``; its pixel-edge outline is ``[u0-0.5, u1-0.5) x [v0-0.5, v1-0.5)``.
+
+Quad rasterization (inverse warp, seed 002 section 2.1 with an exact homography)
+---------------------------------------------------------------------------------
+For a quad with source plane ``n . X_s = 1`` and the rigid map ``X_s = R X_t + T``
+(``R, T`` = ``src_from_tgt``), a target pixel ``p = (u, v, 1)`` with ray ``d = Kt^-1 p`` meets the
+plane at ``z_t = m / (n . R d)`` with ``m = 1 - n . T``. Hence
+
+* ``1/z_t = g . p`` with ``g = (Kt^-T R^T n) / m``  (affine in target pixels), and
+* ``X_s / z_t = (R Kt^-1 + T g^T) p``, so the source pixel is ``Hp / (Hp)_z`` with
+  ``H = Ks (R Kt^-1 + T g^T)``, a 3x3 homography, and ``(Hp)_z = z_s / z_t``.
+
+``m <= 0`` means the target camera is on the back side of the plane (back-facing or edge-on quad):
+the quad is culled. A target pixel is covered when ``g.p > 0`` (in front of the target camera),
+``(Hp)_z > 0`` (in front of the source camera) and the source point lies in the half-open pixel-edge
+outline of the rect. The half-open test is the fill rule: it is evaluated as the sign of four linear
+forms (``Hx - (u0-.5) Hz >= 0``, ``Hx - (u1-.5) Hz < 0``, same for rows), so two coplanar quads that
+share an edge evaluate the *same* linear form with opposite strictness and cover every target
+pixel exactly once (no crack, no double cover) -- the source-space equivalent of the top-left rule.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+__all__: list[str] = []
+
+# Layout of the per-quad coefficient rows computed by setup_quads (12 float64 per quad).
+_G, _HX, _HY, _HZ = 0, 3, 6, 9
+
+
+@njit(cache=True, inline="always")
+def _corner_tgt(uc, vc, a, b, c, ifx, ify, cx, cy, r, t):
+    """Target-frame point of the source pixel-edge corner (uc, vc) on the plane 1/z = a u + b v + c
+    (ifx, ify: reciprocal source focal lengths)."""
+    w = a * uc + b * vc + c
+    if not (w > 0.0):
+        return 0.0, 0.0, 0.0, False
+    zs = 1.0 / w
+    xs = (uc - cx) * ifx * zs - t[0]
+    ys = (vc - cy) * ify * zs - t[1]
+    zs = zs - t[2]
+    # X_t = R^T (X_s - T)
+    x = r[0, 0] * xs + r[1, 0] * ys + r[2, 0] * zs
+    y = r[0, 1] * xs + r[1, 1] * ys + r[2, 1] * zs
+    z = r[0, 2] * xs + r[1, 2] * ys + r[2, 2] * zs
+    return x, y, z, True
+
+
+@njit(cache=True, inline="always")
+def _grow(x, y, z, kt, lim, umin, umax, vmin, vmax):
+    iz = 1.0 / z
+    uu = min(max(kt[0] * x * iz + kt[2], -lim), lim)
+    vv = min(max(kt[1] * y * iz + kt[3], -lim), lim)
+    return min(umin, uu), max(umax, uu), min(vmin, vv), max(vmax, vv)
+
+
+@njit(cache=True, inline="always")
+def _clip_edge(xa, ya, za, xb, yb, zb, eps, kt, lim, umin, umax, vmin, vmax):
+    """Grow the projected bounding box by edge a->b clipped to z > eps (Sutherland-Hodgman:
+    the start vertex if in front, plus the crossing point with z = eps)."""
+    ina = za > eps
+    if ina:
+        umin, umax, vmin, vmax = _grow(xa, ya, za, kt, lim, umin, umax, vmin, vmax)
+    if ina != (zb > eps):
+        s = (eps - za) / (zb - za)
+        umin, umax, vmin, vmax = _grow(xa + s * (xb - xa), ya + s * (yb - ya), eps, kt, lim, umin, umax, vmin, vmax)
+    return umin, umax, vmin, vmax
+
+
+@njit(cache=True, parallel=True)
+def setup_quads(rects, planes, ks, r, t, kt_inv, kt, width, height, coef, bbox):
+    """Per-quad homography rows and target bounding boxes.
+
+    ks, kt: (4,) fx, fy, cx, cy of source / target; r (3,3), t (3,) src_from_tgt; kt_inv (3,3).
+    Writes coef (Q, 12) = [g, Hx, Hy, Hz] rows and bbox (Q, 4) int32 [ulo, vlo, uhi, vhi]
+    (inclusive pixel-center ranges; ulo > uhi marks a culled or invisible quad).
+    """
+    nq = rects.shape[0]
+    fx, fy, cx, cy = ks[0], ks[1], ks[2], ks[3]
+    ifx, ify = 1.0 / fx, 1.0 / fy
+    for q in prange(nq):
+        a, b, c = planes[q, 0], planes[q, 1], planes[q, 2]
+        n0 = a * fx
+        n1 = b * fy
+        n2 = a * cx + b * cy + c
+        m = 1.0 - (n0 * t[0] + n1 * t[1] + n2 * t[2])
+        bbox[q, 0] = 1
+        bbox[q, 2] = 0
+        bbox[q, 1] = 1
+        bbox[q, 3] = 0
+        # relative edge-on test: |n.T| and 1 are the two terms of m
+        if not (m > 1e-9):
+            continue
+        # R^T n
+        rn0 = r[0, 0] * n0 + r[1, 0] * n1 + r[2, 0] * n2
+        rn1 = r[0, 1] * n0 + r[1, 1] * n1 + r[2, 1] * n2
+        rn2 = r[0, 2] * n0 + r[1, 2] * n1 + r[2, 2] * n2
+        # g = Kt^-T (R^T n) / m
+        im = 1.0 / m
+        for j in range(3):
+            coef[q, _G + j] = (kt_inv[0, j] * rn0 + kt_inv[1, j] * rn1 + kt_inv[2, j] * rn2) * im
+        # M = R Kt^-1 + T g^T ; H = Ks M
+        for j in range(3):
+            g = coef[q, _G + j]
+            m0 = r[0, 0] * kt_inv[0, j] + r[0, 1] * kt_inv[1, j] + r[0, 2] * kt_inv[2, j] + t[0] * g
+            m1 = r[1, 0] * kt_inv[0, j] + r[1, 1] * kt_inv[1, j] + r[1, 2] * kt_inv[2, j] + t[1] * g
+            m2 = r[2, 0] * kt_inv[0, j] + r[2, 1] * kt_inv[1, j] + r[2, 2] * kt_inv[2, j] + t[2] * g
+            coef[q, _HX + j] = fx * m0 + cx * m2
+            coef[q, _HY + j] = fy * m1 + cy * m2
+            coef[q, _HZ + j] = m2
+        # --- bounding box of the quad outline projected into the target, clipped at z_t > eps
+        u0 = rects[q, 0] - 0.5
+        v0 = rects[q, 1] - 0.5
+        u1 = rects[q, 2] - 0.5
+        v1 = rects[q, 3] - 0.5
+        x0, y0, z0, ok0 = _corner_tgt(u0, v0, a, b, c, ifx, ify, cx, cy, r, t)
+        x1, y1, z1, ok1 = _corner_tgt(u1, v0, a, b, c, ifx, ify, cx, cy, r, t)
+        x2, y2, z2, ok2 = _corner_tgt(u1, v1, a, b, c, ifx, ify, cx, cy, r, t)
+        x3, y3, z3, ok3 = _corner_tgt(u0, v1, a, b, c, ifx, ify, cx, cy, r, t)
+        if not (ok0 and ok1 and ok2 and ok3):
+            # the plane reaches the source camera plane inside the outline: no finite corners,
+            # test the whole target image (the per-pixel tests stay exact)
+            umin, vmin, umax, vmax = -1.0, -1.0, float(width), float(height)
+        else:
+            zmax = max(max(abs(z0), abs(z1)), max(abs(z2), abs(z3)))
+            eps = 1e-7 * zmax
+            lim = 4.0 * (width + height) + 16.0
+            umin, umax, vmin, vmax = np.inf, -np.inf, np.inf, -np.inf
+            umin, umax, vmin, vmax = _clip_edge(x0, y0, z0, x1, y1, z1, eps, kt, lim, umin, umax, vmin, vmax)
+            umin, umax, vmin, vmax = _clip_edge(x1, y1, z1, x2, y2, z2, eps, kt, lim, umin, umax, vmin, vmax)
+            umin, umax, vmin, vmax = _clip_edge(x2, y2, z2, x3, y3, z3, eps, kt, lim, umin, umax, vmin, vmax)
+            umin, umax, vmin, vmax = _clip_edge(x3, y3, z3, x0, y0, z0, eps, kt, lim, umin, umax, vmin, vmax)
+            if not (umin <= umax):
+                continue  # entirely behind the target camera
+        # inclusive pixel-center range, with a tiny margin against rounding (the exact
+        # per-pixel tests decide coverage)
+        ulo = max(int(np.ceil(umin - 1e-6)), 0)
+        uhi = min(int(np.floor(umax + 1e-6)), width - 1)
+        vlo = max(int(np.ceil(vmin - 1e-6)), 0)
+        vhi = min(int(np.floor(vmax + 1e-6)), height - 1)
+        bbox[q, 0] = ulo
+        bbox[q, 1] = vlo
+        bbox[q, 2] = uhi
+        bbox[q, 3] = vhi
+
+
+@njit(cache=True)
+def _span(e0, e1, e2, v, strict, lo, hi):
+    """Narrow the integer range [lo, hi] to u with e0*u + e1*v + e2 (>= 0 or > 0 if strict),
+    conservatively (one pixel of slack; the exact test is per pixel)."""
+    cst = e1 * v + e2
+    if e0 > 0.0:
+        x = -cst / e0
+        if x == x:  # not NaN
+            b = int(np.floor(max(min(x, 1e9), -1e9))) - 1
+            lo = max(lo, b)
+    elif e0 < 0.0:
+        x = -cst / e0
+        if x == x:
+            b = int(np.ceil(max(min(x, 1e9), -1e9))) + 1
+            hi = min(hi, b)
+    else:
+        if cst < 0.0 or (strict and cst == 0.0):
+            hi = lo - 1
+    return lo, hi
+
+
+@njit(cache=True)
+def bucket_bands(bbox, height, nbands):
+    """Counting sort of visible quads into horizontal bands of target rows.
+
+    Returns (start (nbands + 1,) int64, quads (N,) int32): band k holds quads
+    ``quads[start[k]:start[k+1]]`` in increasing quad order (a quad spanning several bands is
+    listed in each)."""
+    rows_per_band = (height + nbands - 1) // nbands
+    count = np.zeros(nbands + 1, np.int64)
+    nq = bbox.shape[0]
+    for q in range(nq):
+        if bbox[q, 0] > bbox[q, 2] or bbox[q, 1] > bbox[q, 3]:
+            continue
+        for k in range(bbox[q, 1] // rows_per_band, bbox[q, 3] // rows_per_band + 1):
+            count[k + 1] += 1
+    for k in range(nbands):
+        count[k + 1] += count[k]
+    quads = np.empty(count[nbands], np.int32)
+    fill = count[:nbands].copy()
+    for q in range(nq):
+        if bbox[q, 0] > bbox[q, 2] or bbox[q, 1] > bbox[q, 3]:
+            continue
+        for k in range(bbox[q, 1] // rows_per_band, bbox[q, 3] // rows_per_band + 1):
+            quads[fill[k]] = q
+            fill[k] += 1
+    return count, quads
+
+
+@njit(cache=True, parallel=True)
+def raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quads, inv_z, map_u, map_v, quad_id):
+    """Z-buffered rasterization of quads into source-coordinate maps.
+
+    inv_z (H, W) float64 must be zero-initialized; map_u/map_v (H, W) float32 and quad_id (H, W)
+    int32 receive the source pixel coordinates and quad index of the nearest quad per target
+    pixel (untouched where uncovered). clamp (Q, 4) uint8 flags [left, top, right, bottom]: when
+    set, the sample position is clamped to the rect's outer pixel *centers* on that side so that
+    bilinear sampling never reads across a depth edge.
+    """
+    nbands = band_start.shape[0] - 1
+    rows_per_band = (height + nbands - 1) // nbands
+    for band in prange(nbands):
+        r0 = band * rows_per_band
+        r1 = min(height, r0 + rows_per_band)
+        for k in range(band_start[band], band_start[band + 1]):
+            q = band_quads[k]
+            ulo, vlo, uhi, vhi = bbox[q, 0], bbox[q, 1], bbox[q, 2], bbox[q, 3]
+            g0, g1, g2 = coef[q, 0], coef[q, 1], coef[q, 2]
+            hx0, hx1, hx2 = coef[q, 3], coef[q, 4], coef[q, 5]
+            hy0, hy1, hy2 = coef[q, 6], coef[q, 7], coef[q, 8]
+            hz0, hz1, hz2 = coef[q, 9], coef[q, 10], coef[q, 11]
+            eu0 = rects[q, 0] - 0.5
+            ev0 = rects[q, 1] - 0.5
+            eu1 = rects[q, 2] - 0.5
+            ev1 = rects[q, 3] - 0.5
+            # four edge forms E = Hx - e*Hz (columns) / Hy - e*Hz (rows)
+            l0, l1, l2 = hx0 - eu0 * hz0, hx1 - eu0 * hz1, hx2 - eu0 * hz2  # >= 0
+            rr0, rr1, rr2 = hx0 - eu1 * hz0, hx1 - eu1 * hz1, hx2 - eu1 * hz2  # < 0
+            t0, t1, t2 = hy0 - ev0 * hz0, hy1 - ev0 * hz1, hy2 - ev0 * hz2  # >= 0
+            b0, b1, b2 = hy0 - ev1 * hz0, hy1 - ev1 * hz1, hy2 - ev1 * hz2  # < 0
+            cl = clamp[q, 0] != 0
+            ct = clamp[q, 1] != 0
+            cr = clamp[q, 2] != 0
+            cb = clamp[q, 3] != 0
+            su0 = float(rects[q, 0])
+            sv0 = float(rects[q, 1])
+            su1 = float(rects[q, 2] - 1)
+            sv1 = float(rects[q, 3] - 1)
+            for v in range(max(vlo, r0), min(vhi + 1, r1)):
+                fv = float(v)
+                lo, hi = ulo, uhi
+                if hi - lo > 6:  # narrow long rows analytically; tiny quads test every pixel
+                    lo, hi = _span(g0, g1, g2, fv, True, lo, hi)
+                    lo, hi = _span(hz0, hz1, hz2, fv, True, lo, hi)
+                    lo, hi = _span(l0, l1, l2, fv, False, lo, hi)
+                    lo, hi = _span(-rr0, -rr1, -rr2, fv, True, lo, hi)
+                    lo, hi = _span(t0, t1, t2, fv, False, lo, hi)
+                    lo, hi = _span(-b0, -b1, -b2, fv, True, lo, hi)
+                    lo = max(lo, ulo)
+                    hi = min(hi, uhi)
+                gv = g1 * fv + g2
+                xv = hx1 * fv + hx2
+                yv = hy1 * fv + hy2
+                zv = hz1 * fv + hz2
+                lv, rv, tv, bv = l1 * fv + l2, rr1 * fv + rr2, t1 * fv + t2, b1 * fv + b2
+                for u in range(lo, hi + 1):
+                    fu = float(u)
+                    iz = g0 * fu + gv
+                    if not (iz > inv_z[v, u]):
+                        continue
+                    hz = hz0 * fu + zv
+                    if not (hz > 0.0):
+                        continue
+                    if not (l0 * fu + lv >= 0.0 and rr0 * fu + rv < 0.0):
+                        continue
+                    if not (t0 * fu + tv >= 0.0 and b0 * fu + bv < 0.0):
+                        continue
+                    us = (hx0 * fu + xv) / hz
+                    vs = (hy0 * fu + yv) / hz
+                    if cl and us < su0:
+                        us = su0
+                    if cr and us > su1:
+                        us = su1
+                    if ct and vs < sv0:
+                        vs = sv0
+                    if cb and vs > sv1:
+                        vs = sv1
+                    inv_z[v, u] = iz
+                    map_u[v, u] = us
+                    map_v[v, u] = vs
+                    quad_id[v, u] = q
+
+
+@njit(cache=True, parallel=True)
+def finish_maps(inv_z, map_u, map_v, depth, coverage, far_coord):
+    """depth = 1/inv_z (float32, NaN where uncovered); uncovered maps point outside the image."""
+    h, w = inv_z.shape
+    for v in prange(h):
+        for u in range(w):
+            iz = inv_z[v, u]
+            if iz > 0.0:
+                depth[v, u] = 1.0 / iz
+                coverage[v, u] = True
+            else:
+                depth[v, u] = np.nan
+                coverage[v, u] = False
+                map_u[v, u] = far_coord
+                map_v[v, u] = far_coord
+
+
+@njit(cache=True)
+def _off_plane(inv, uu, vv, a, b, c, rel_tol):
+    p = a * uu + b * vv + c
+    q = inv[vv, uu]
+    return not (q > 0.0) or abs(q - p) > rel_tol * abs(p)
+
+
+@njit(cache=True, parallel=True)
+def clamp_flags(rects, planes, inv, rel_tol, out):
+    """Per quad and side [left, top, right, bottom]: 1 when any source pixel just outside that
+    side is outside the image, has no depth (``inv <= 0``), or has an inverse depth ``inv`` off
+    the quad's plane by more than ``rel_tol`` (a depth edge), so bilinear sampling must not read
+    across it."""
+    h, w = inv.shape
+    for q in prange(rects.shape[0]):
+        u0, v0, u1, v1 = rects[q, 0], rects[q, 1], rects[q, 2], rects[q, 3]
+        a, b, c = planes[q, 0], planes[q, 1], planes[q, 2]
+        # sides: 0 left (column u0-1), 1 top (row v0-1), 2 right (column u1), 3 bottom (row v1)
+        for side in range(4):
+            vertical = side == 0 or side == 2
+            if vertical:
+                fixed = u0 - 1 if side == 0 else u1
+                inside = 0 <= fixed < w
+                lo, hi = v0, v1
+            else:
+                fixed = v0 - 1 if side == 1 else v1
+                inside = 0 <= fixed < h
+                lo, hi = u0, u1
+            flag = 0
+            if not inside:
+                flag = 1
+            else:
+                for k in range(lo, hi):
+                    uu = fixed if vertical else k
+                    vv = k if vertical else fixed
+                    if _off_plane(inv, uu, vv, a, b, c, rel_tol):
+                        flag = 1
+                        break
+            out[q, side] = flag
+
+
+# ------------------------------------------------------------------------- forward warp
+@njit(cache=True, parallel=True)
+def project_pixels(depth, ks, r, t, kt, tu, tv, tz):
+    """Per source pixel: target pixel position (tu, tv) and planar target depth tz
+    (NaN where the source depth is invalid or the point is behind the target camera).
+    r, t: tgt_from_src."""
+    h, w = depth.shape
+    fx, fy, cx, cy = ks[0], ks[1], ks[2], ks[3]
+    tfx, tfy, tcx, tcy = kt[0], kt[1], kt[2], kt[3]
+    for v in prange(h):
+        y1 = (v - cy) / fy
+        for u in range(w):
+            z = depth[v, u]
+            if not (z > 0.0):
+                tz[v, u] = np.nan
+                continue
+            x = (u - cx) / fx * z
+            y = y1 * z
+            X = r[0, 0] * x + r[0, 1] * y + r[0, 2] * z + t[0]
+            Y = r[1, 0] * x + r[1, 1] * y + r[1, 2] * z + t[1]
+            Z = r[2, 0] * x + r[2, 1] * y + r[2, 2] * z + t[2]
+            if not (Z > 0.0):
+                tz[v, u] = np.nan
+                continue
+            tu[v, u] = tfx * X / Z + tcx
+            tv[v, u] = tfy * Y / Z + tcy
+            tz[v, u] = Z
+
+
+@njit(cache=True)
+def splat(tu, tv, tz, inverse, zbuf, map_u, map_v):
+    """Round-to-nearest z-buffered splat (seed 003 method 2). zbuf (H, W) float64 = +inf.
+
+    map_u/map_v receive the source coordinate to sample at each target pixel: the source pixel
+    center (``inverse=False``), or the source center shifted by the splat's rounding offset
+    (``inverse=True``: the source point that lands on the target pixel center, to first order
+    with a unit Jacobian)."""
+    h, w = tz.shape
+    ht, wt = zbuf.shape
+    for v in range(h):
+        for u in range(w):
+            z = tz[v, u]
+            if not (z > 0.0):
+                continue
+            x = tu[v, u]
+            y = tv[v, u]
+            iu = int(np.floor(x + 0.5))
+            iv = int(np.floor(y + 0.5))
+            if iu < 0 or iv < 0 or iu >= wt or iv >= ht:
+                continue
+            if z < zbuf[iv, iu]:
+                zbuf[iv, iu] = z
+                if inverse:
+                    map_u[iv, iu] = min(max(u + (iu - x), 0.0), w - 1.0)
+                    map_v[iv, iu] = min(max(v + (iv - y), 0.0), h - 1.0)
+                else:
+                    map_u[iv, iu] = u
+                    map_v[iv, iu] = v
+
+
+@njit(cache=True, parallel=True)
+def finish_splat(zbuf, map_u, map_v, depth, coverage, far_coord):
+    h, w = zbuf.shape
+    for v in prange(h):
+        for u in range(w):
+            z = zbuf[v, u]
+            if z < np.inf:
+                depth[v, u] = z
+                coverage[v, u] = True
+            else:
+                depth[v, u] = np.nan
+                coverage[v, u] = False
+                map_u[v, u] = far_coord
+                map_v[v, u] = far_coord
+
+
+# ------------------------------------------------------------------------- compositing
+@njit(cache=True, inline="always")
+def _store(out, v, u, ch, x, is_int, maxval):
+    if is_int:
+        x = np.floor(x + 0.5)
+        if x < 0.0:
+            x = 0.0
+        elif x > maxval:
+            x = maxval
+    out[v, u, ch] = x
+
+
+@njit(cache=True, parallel=True)
+def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, depth, coverage):
+    """Two-layer composite (seed 002 section 2.2 step (1) and the depth-aware blend).
+
+    ca, cb (H, W, C) float32 colors, za, zb (H, W) float32 depths (NaN uncovered), wa >= wb the
+    viewpoint weights (layer a is the nearer source). blend=False: a in front, b fills a's holes.
+    blend=True: where both cover and ``|za - zb| <= rel_tol * min(za, zb)`` the colors and depths
+    are mixed with weights wa, wb; elsewhere the nearer surface wins. ``out`` may be an integer
+    array (values rounded and clipped to [0, maxval])."""
+    h, w, nc = ca.shape
+    for v in prange(h):
+        for u in range(w):
+            a = za[v, u]
+            b = zb[v, u]
+            has_a = a > 0.0
+            has_b = b > 0.0
+            if has_a and has_b:
+                if blend and abs(a - b) <= rel_tol * min(a, b):
+                    for ch in range(nc):
+                        _store(out, v, u, ch, wa * ca[v, u, ch] + wb * cb[v, u, ch], is_int, maxval)
+                    depth[v, u] = wa * a + wb * b
+                elif (not blend) or a <= b:
+                    for ch in range(nc):
+                        _store(out, v, u, ch, ca[v, u, ch], is_int, maxval)
+                    depth[v, u] = a
+                else:
+                    for ch in range(nc):
+                        _store(out, v, u, ch, cb[v, u, ch], is_int, maxval)
+                    depth[v, u] = b
+                coverage[v, u] = True
+            elif has_a:
+                for ch in range(nc):
+                    _store(out, v, u, ch, ca[v, u, ch], is_int, maxval)
+                depth[v, u] = a
+                coverage[v, u] = True
+            elif has_b:
+                for ch in range(nc):
+                    _store(out, v, u, ch, cb[v, u, ch], is_int, maxval)
+                depth[v, u] = b
+                coverage[v, u] = True
+            else:
+                for ch in range(nc):
+                    out[v, u, ch] = 0
+                depth[v, u] = np.nan
+                coverage[v, u] = False
+
+
+# ------------------------------------------------------------------------- hole filling
+@njit(cache=True, parallel=True)
+def background_fill(color, depth, holes, rel_tol, max_dist, is_int, filled):
+    """Fill hole pixels from the *farther* of their nearest non-hole neighbours (in place).
+
+    For every hole pixel the nearest non-hole pixel is found in each of the four directions
+    (left, right, up, down, at most ``max_dist`` pixels away). The farthest candidate depth z_bg
+    marks the background; candidates with depth >= z_bg (1 - rel_tol) are averaged with weights
+    1/distance, so disocclusions take background, never foreground, colors. ``filled`` (bool)
+    marks the pixels written; holes with no candidate stay untouched."""
+    h, w, nc = color.shape
+    # nearest non-hole column to the left / right of each pixel, per row
+    left = np.empty((h, w), np.int32)
+    right = np.empty((h, w), np.int32)
+    up = np.empty((h, w), np.int32)
+    down = np.empty((h, w), np.int32)
+    for v in prange(h):
+        last = -1
+        for u in range(w):
+            if not holes[v, u]:
+                last = u
+            left[v, u] = last
+        last = -1
+        for u in range(w - 1, -1, -1):
+            if not holes[v, u]:
+                last = u
+            right[v, u] = last
+    for u in prange(w):
+        last = -1
+        for v in range(h):
+            if not holes[v, u]:
+                last = v
+            up[v, u] = last
+        last = -1
+        for v in range(h - 1, -1, -1):
+            if not holes[v, u]:
+                last = v
+            down[v, u] = last
+    for v in prange(h):
+        cu = np.empty(4, np.int64)
+        cv = np.empty(4, np.int64)
+        cd = np.empty(4, np.float64)
+        cz = np.empty(4, np.float64)
+        for u in range(w):
+            if not holes[v, u]:
+                continue
+            n = 0
+            vi = np.int64(v)
+            ui = np.int64(u)
+            for k in range(4):
+                if k == 0:
+                    uu = np.int64(left[vi, ui])
+                    vv = vi
+                    dist = ui - uu
+                elif k == 1:
+                    uu = np.int64(right[vi, ui])
+                    vv = vi
+                    dist = uu - ui
+                elif k == 2:
+                    uu = ui
+                    vv = np.int64(up[vi, ui])
+                    dist = vi - vv
+                else:
+                    uu = ui
+                    vv = np.int64(down[vi, ui])
+                    dist = vv - vi
+                if uu < 0 or vv < 0 or dist > max_dist:
+                    continue
+                z = depth[vv, uu]
+                if not (z > 0.0):
+                    continue
+                cu[n] = uu
+                cv[n] = vv
+                cd[n] = dist
+                cz[n] = z
+                n += 1
+            if n == 0:
+                continue
+            zbg = 0.0
+            for k in range(n):
+                zbg = max(zbg, cz[k])
+            wsum = 0.0
+            zacc = 0.0
+            for k in range(n):
+                if cz[k] >= zbg * (1.0 - rel_tol):
+                    wsum += 1.0 / cd[k]
+            for ch in range(nc):
+                acc = 0.0
+                for k in range(n):
+                    if cz[k] >= zbg * (1.0 - rel_tol):
+                        acc += color[cv[k], cu[k], ch] / cd[k]
+                x = acc / wsum
+                if is_int:
+                    x = np.floor(x + 0.5)
+                color[v, u, ch] = x
+            for k in range(n):
+                if cz[k] >= zbg * (1.0 - rel_tol):
+                    zacc += cz[k] / cd[k]
+            depth[v, u] = zacc / wsum
+            filled[v, u] = True

@@ -1,0 +1,121 @@
+"""Two-source compositing of rendered layers (seed 002 section 2.2, step 1).
+
+Two source views rendered into the same intermediate camera leave complementary holes. The seed
+orders them by the distance of the new viewpoint to each source: the nearer source's layer is the
+foreground, the other only fills its holes (``mode="front"``). The default ``mode="blend"`` is
+depth-aware: where both layers see the same surface (planar depths within ``depth_tol``, relative)
+their colors are mixed with weights from the viewpoint distances (``w_a = d_b / (d_a + d_b)``),
+which removes the seam where the foreground layer ends and averages view-dependent differences;
+where the depths disagree the nearer surface wins (a z-test), so an object one source missed still
+occludes what is behind it. Measured on the bundled pairs (``benchmarks/bench_render.py``) the
+blend is the better of the two (README, section render).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _render_kernels as _k
+from ._validate import check_choice, check_positive
+from .camera import Camera
+from .render import Layer
+
+__all__ = ["COMPOSITE_MODES", "Composite", "composite", "viewpoint_weights"]
+
+#: Compositing modes: depth-aware blend (default) and the seed's front/back order.
+COMPOSITE_MODES = ("blend", "front")
+
+
+@dataclass(frozen=True, eq=False)
+class Composite:
+    """Result of :func:`composite`: ``color`` (H, W, C) in the requested dtype, ``depth`` (H, W)
+    float32 planar z (NaN where no layer covers), ``coverage`` (H, W) bool."""
+
+    color: np.ndarray
+    depth: np.ndarray
+    coverage: np.ndarray
+
+
+def viewpoint_weights(camera: Camera, sources) -> np.ndarray:
+    """Blend weights of source cameras for a target ``camera`` from viewpoint distances.
+
+    Two sources at distances ``d_a``, ``d_b`` from the target's center get ``w_a = d_b / (d_a + d_b)``
+    and ``w_b = d_a / (d_a + d_b)`` (inverse-distance weights; for a camera interpolated at
+    parameter t on the segment between them, ``w_a = 1 - t``). When all centers coincide (pure
+    rotation), the rotation angle between the optical axes replaces the distance. A source at
+    the target's exact pose gets weight 1.
+    """
+    sources = list(sources)
+    d = np.array([np.linalg.norm(camera.position - s.position) for s in sources])
+    if not np.any(d > 1e-12 * max(1.0, float(np.abs(camera.position).max()))):
+        z = camera.world_from_cam[:3, 2]
+        d = np.array([np.arccos(np.clip(z @ s.world_from_cam[:3, 2], -1, 1)) for s in sources])
+    if np.any(d == 0):
+        w = (d == 0).astype(np.float64)
+    else:
+        w = 1.0 / d
+    return w / w.sum()
+
+
+def composite(
+    layers,
+    weights,
+    *,
+    mode: str = "blend",
+    depth_tol: float = 0.02,
+    dtype=np.float32,
+) -> Composite:
+    """Combine one or two layers rendered into the same camera.
+
+    Parameters
+    ----------
+    layers : sequence of Layer
+        One or two layers of equal size and channel count.
+    weights : sequence of float
+        Non-negative weight per layer (e.g. :func:`viewpoint_weights`); normalized here. The
+        layer with the larger weight is the nearer source (the foreground for ``mode="front"``).
+    mode : {"blend", "front"}
+        Depth-aware blend (default) or the seed's order (nearer source in front, the other only
+        in its holes).
+    depth_tol : float
+        Relative planar-depth tolerance under which two layers see the same surface
+        (``|z_a - z_b| <= depth_tol * min(z_a, z_b)``).
+    dtype : numpy dtype
+        Output color dtype. Integer outputs are rounded to nearest and clipped to the dtype's
+        range (layers hold colors in the source's value scale, see :class:`ibr.render.Layer`).
+    """
+    check_choice("mode", mode, COMPOSITE_MODES)
+    depth_tol = check_positive("depth_tol", depth_tol)
+    layers = list(layers)
+    if not 1 <= len(layers) <= 2:
+        raise ValueError(f"layers: expected 1 or 2 layers, got {len(layers)}")
+    for i, layer in enumerate(layers):
+        if not isinstance(layer, Layer):
+            raise TypeError(f"layers[{i}]: expected a Layer, got {type(layer).__name__}")
+        if layer.color.shape != layers[0].color.shape:
+            raise ValueError(
+                f"layers[{i}]: color shape {layer.color.shape} differs from layers[0]'s {layers[0].color.shape}"
+            )
+    w = np.asarray(weights, dtype=np.float64).reshape(-1)
+    if w.shape != (len(layers),) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
+        raise ValueError(f"weights: expected {len(layers)} non-negative finite weights with a positive sum, got {weights!r}")
+    w = w / w.sum()
+    dtype = np.dtype(dtype)
+    is_int = dtype.kind in "ui"
+    maxval = float(np.iinfo(dtype).max) if is_int else 0.0
+    h, wd, c = layers[0].color.shape
+    out = np.empty((h, wd, c), dtype)
+    depth = np.empty((h, wd), np.float32)
+    coverage = np.empty((h, wd), np.bool_)
+    if len(layers) == 1:
+        a = b = layers[0]
+        wa, wb = 1.0, 0.0
+    else:
+        order = (0, 1) if w[0] >= w[1] else (1, 0)
+        a, b = layers[order[0]], layers[order[1]]
+        wa, wb = float(w[order[0]]), float(w[order[1]])
+    _k.composite2(a.color, a.depth, b.color, b.depth, wa, wb, mode == "blend", depth_tol,
+                  is_int, maxval, out, depth, coverage)
+    return Composite(out, depth, coverage)

@@ -1,0 +1,310 @@
+"""Inverse-warp renderer: rasterize a planar quad mesh into a target pinhole camera.
+
+Seed 002 section 2.1 ("inverse warping") maps every quad of a source view into the new view and
+texture-maps the source rectangle onto it. The seed used affine texture mapping, which drifts on
+large, near quads; here each covered target pixel is mapped to its source pixel through the quad's
+exact 3x3 homography (a planar quad maps by a homography), its depth comes exactly from the quad's
+plane, and a z-buffer keeps the nearest quad. The kernel writes *source coordinates* and depth; one
+``cv2.remap`` then samples the color bilinearly (DESIGN.md section 6: cheaper than sampling in the
+kernel).
+
+Conventions
+-----------
+* Pixel (u, v) = (column, row), centers at integer coordinates; the image spans
+  [-0.5, W - 0.5] x [-0.5, H - 0.5]. A target pixel (3, 4) is covered by a quad when the ray
+  through the *center* (3.0, 4.0) hits the quad; a quad with rect [2, 3, 6, 4] owns the half-open
+  source area [1.5, 5.5) x [2.5, 3.5) (the fill rule: shared edges belong to exactly one quad).
+* Depth is planar z in the target camera (scene units), float32, NaN where uncovered.
+* Layer colors are float32 in the source's value scale (0..255 for uint8 sources, 0..65535 for
+  uint16, unchanged for float sources).
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from . import _render_kernels as _k
+from ._validate import check_choice, check_image, check_positive
+from .camera import Camera
+
+__all__ = ["Layer", "SourceMaps", "render_mesh", "rasterize_mesh", "sample_maps", "FOOTPRINTS"]
+
+#: Sample-footprint modes of :func:`render_mesh`.
+FOOTPRINTS = ("surface", "quad", "free")
+
+# A source coordinate far outside every image: remap's constant border returns 0 there.
+_FAR = np.float32(-1.0e6)
+
+
+@dataclass(frozen=True, eq=False)
+class Layer:
+    """One source rendered into a target camera.
+
+    Attributes
+    ----------
+    color : (H, W, C) float32
+        Sampled color in the source's value scale; 0 where uncovered.
+    depth : (H, W) float32
+        Planar z in the target camera (scene units), NaN where uncovered.
+    coverage : (H, W) bool
+        True where some quad (or splat) covered the pixel center.
+    """
+
+    color: np.ndarray
+    depth: np.ndarray
+    coverage: np.ndarray
+
+    def __post_init__(self):
+        c = np.asarray(self.color)
+        if c.ndim == 2:
+            object.__setattr__(self, "color", c[..., None])
+        if self.depth.shape != self.coverage.shape or self.color.shape[:2] != self.depth.shape:
+            raise ValueError(
+                f"Layer: color {self.color.shape}, depth {self.depth.shape} and coverage "
+                f"{self.coverage.shape} must share (H, W)"
+            )
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.depth.shape
+
+
+@dataclass(frozen=True, eq=False)
+class SourceMaps:
+    """Where each target pixel samples its source (the geometry half of a render).
+
+    ``map_u``, ``map_v`` (H, W) float32 source pixel coordinates (centers at integers; a far
+    negative value where uncovered), ``depth`` (H, W) float32 target planar z (NaN uncovered),
+    ``coverage`` (H, W) bool.
+    """
+
+    map_u: np.ndarray
+    map_v: np.ndarray
+    depth: np.ndarray
+    coverage: np.ndarray
+
+
+def _intrinsics(cam: Camera) -> np.ndarray:
+    return np.array([cam.fx, cam.fy, cam.cx, cam.cy], dtype=np.float64)
+
+
+def src_from_tgt(source: Camera, target: Camera) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation (3, 3) and translation (3,) of ``cam_src_from_cam_tgt``."""
+    m = source.cam_from_world @ target.world_from_cam
+    return np.ascontiguousarray(m[:3, :3]), np.ascontiguousarray(m[:3, 3])
+
+
+def _nbands(height: int) -> int:
+    import numba
+
+    return int(min(height, max(1, 4 * numba.get_num_threads())))
+
+
+# Per-mesh caches (keyed on the mesh object, dropped with it).
+_clamp_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _mesh_inv_depth(mesh) -> np.ndarray:
+    """(H, W) float64 inverse depth of each source pixel from its quad's plane, 0 where none."""
+    q = mesh.quad_of_pixel
+    h, w = q.shape
+    v, u = np.mgrid[0:h, 0:w]
+    p = mesh.inv_depth_planes
+    qi = np.where(q >= 0, q, 0)
+    inv = p[qi, 0] * u + p[qi, 1] * v + p[qi, 2]
+    inv[q < 0] = 0.0
+    return inv
+
+
+def _clamp_flags(mesh, footprint: str, depth_tol: float) -> np.ndarray:
+    nq = len(mesh.rects)
+    if footprint == "free":
+        return np.zeros((nq, 4), np.uint8)
+    if footprint == "quad":
+        return np.ones((nq, 4), np.uint8)
+    per_mesh = _clamp_cache.setdefault(mesh, {})
+    flags = per_mesh.get(depth_tol)
+    if flags is None:
+        flags = np.empty((nq, 4), np.uint8)
+        if nq:
+            _k.clamp_flags(mesh.rects, mesh.inv_depth_planes, _mesh_inv_depth(mesh), depth_tol, flags)
+        flags.setflags(write=False)
+        per_mesh[depth_tol] = flags
+    return flags
+
+
+def rasterize_mesh(mesh, camera: Camera, *, footprint: str = "surface", depth_tol: float = 0.01) -> SourceMaps:
+    """Z-buffered rasterization of ``mesh`` into ``camera``: source coordinates and depth.
+
+    Parameters
+    ----------
+    mesh : QuadMesh
+        Quads of one source view (``mesh.camera`` is the source camera).
+    camera : Camera
+        Target camera (any size and intrinsics).
+    footprint : {"surface", "quad", "free"}
+        Where bilinear sampling may read outside a quad's own source pixels. ``"surface"``
+        (default) clamps sample positions to the quad's outer pixel centers only on sides that
+        face a depth edge (a neighbour off the quad's plane by more than ``depth_tol`` in relative
+        inverse depth, no depth, or the image border), so colors never bleed across depth edges
+        yet stay smooth across quad seams on one surface; ``"quad"`` clamps on every side;
+        ``"free"`` never clamps (except by ``cv2.remap``'s border).
+    depth_tol : float
+        Relative inverse-depth tolerance of the ``"surface"`` edge test.
+
+    Returns
+    -------
+    SourceMaps
+    """
+    check_choice("footprint", footprint, FOOTPRINTS)
+    depth_tol = check_positive("depth_tol", depth_tol)
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera: expected a Camera, got {type(camera).__name__}")
+    src = mesh.camera
+    h, w = camera.height, camera.width
+    r, t = src_from_tgt(src, camera)
+    kt = _intrinsics(camera)
+    kt_inv = np.linalg.inv(camera.K)
+    nq = len(mesh.rects)
+    coef = np.empty((nq, 12), np.float64)
+    bbox = np.empty((nq, 4), np.int32)
+    inv_z = np.zeros((h, w), np.float64)
+    map_u = np.empty((h, w), np.float32)
+    map_v = np.empty((h, w), np.float32)
+    quad_id = np.empty((h, w), np.int32)
+    depth = np.empty((h, w), np.float32)
+    coverage = np.empty((h, w), np.bool_)
+    if nq:
+        _k.setup_quads(mesh.rects, mesh.inv_depth_planes, _intrinsics(src), r, t, kt_inv, kt, w, h, coef, bbox)
+        flags = _clamp_flags(mesh, footprint, depth_tol)
+        start, order = _k.bucket_bands(bbox, h, _nbands(h))
+        _k.raster_quads(mesh.rects, coef, bbox, flags, w, h, start, order, inv_z, map_u, map_v, quad_id)
+    _k.finish_maps(inv_z, map_u, map_v, depth, coverage, _FAR)
+    return SourceMaps(map_u, map_v, depth, coverage)
+
+
+def as_float_color(color) -> np.ndarray:
+    """(H, W, C) float32 view or copy of ``color`` in its own value scale (no rescaling)."""
+    c = np.asarray(color)
+    if c.ndim == 2:
+        c = c[..., None]
+    if c.dtype != np.float32:
+        c = c.astype(np.float32)
+    return np.ascontiguousarray(c)
+
+
+def sample_maps(color_f32: np.ndarray, map_u: np.ndarray, map_v: np.ndarray) -> np.ndarray:
+    """Bilinear ``cv2.remap`` of a float32 (H, W, C) image at source coordinates (centers at
+    integers: map value 3.0 reads pixel column 3 exactly, 3.5 averages columns 3 and 4).
+
+    Outside the image the constant border returns 0. OpenCV quantizes the fractional position
+    to 1/32 pixel (INTER_BITS = 5), exact at integer positions.
+    """
+    c = color_f32.shape[2]
+    if c > 4:
+        raise ValueError(f"color: at most 4 channels, got {c}")
+    out = cv2.remap(color_f32, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    if out.ndim == 2:
+        out = out[..., None]
+    return out
+
+
+def render_mesh(
+    mesh, color, camera: Camera, *, footprint: str = "surface", depth_tol: float = 0.01
+) -> Layer:
+    """Render a source's quad mesh into a target camera (inverse warp with a z-buffer).
+
+    Every target pixel center is traced to the nearest quad by the quad's exact homography
+    (``ibr._render_kernels`` derives it: ``1/z_t = g.p``, source pixel ``Hp / (Hp)_z``), so planar
+    surfaces show no texture drift and the depth is the plane's, exactly. Quads whose plane faces
+    away from the target camera are culled; quads crossing the target camera plane are cut there
+    (only hits in front of both cameras count), never smeared.
+
+    Parameters
+    ----------
+    mesh : QuadMesh
+        Source quads (``ibr.build_mesh``); ``mesh.camera`` is the source camera.
+    color : (H, W, C) or (H, W) array
+        Source color, same size as ``mesh.camera``; uint8, uint16 or float.
+    camera : Camera
+        Target camera.
+    footprint, depth_tol
+        See :func:`rasterize_mesh`.
+
+    Returns
+    -------
+    Layer
+        float32 color (source value scale), target planar depth (NaN uncovered), coverage.
+
+    Examples
+    --------
+    A pixel center (u, v) = (10.0, 20.0) of the target samples the source at ``Hp/(Hp)_z``; with
+    the identity warp that is exactly (10.0, 20.0), so ``render_mesh(mesh, c, mesh.camera)``
+    returns ``c`` on every pixel that has a quad.
+    """
+    col = check_image("color", color, channels=(1, 2, 3, 4))
+    if col.shape[:2] != mesh.camera.shape:
+        raise ValueError(
+            f"color: size {col.shape[1]}x{col.shape[0]} does not match the mesh's source camera "
+            f"{mesh.camera.width}x{mesh.camera.height}"
+        )
+    maps = rasterize_mesh(mesh, camera, footprint=footprint, depth_tol=depth_tol)
+    sampled = sample_maps(as_float_color(col), maps.map_u, maps.map_v)
+    return Layer(sampled, maps.depth, maps.coverage)
+
+
+# ------------------------------------------------------------------------- reference
+def rasterize_mesh_reference(mesh, camera: Camera) -> SourceMaps:
+    """Slow numpy reference of :func:`rasterize_mesh` (``footprint="free"``) for tests.
+
+    Independent geometry: each quad's plane is rebuilt in the *world* frame from three of its
+    corners, every target pixel ray is intersected with it, the hit is projected into the source
+    camera and kept if it falls in the rect's half-open pixel-edge outline, lies in front of both
+    cameras, and the target camera is on the front side of the plane. Nearest hit wins.
+    """
+    h, w = camera.shape
+    origin, _ = camera.rays_world()
+    d = camera.rays_cam() @ camera.world_from_cam[:3, :3].T  # z_t = 1 scaled, world frame
+    best = np.full((h, w), np.inf)
+    mu = np.full((h, w), np.float32(_FAR), np.float32)
+    mv = np.full((h, w), np.float32(_FAR), np.float32)
+    src = mesh.camera
+    corners = mesh.corners_cam @ src.world_from_cam[:3, :3].T + src.world_from_cam[:3, 3]
+    src_center = src.position
+    for q in range(len(mesh.rects)):
+        c = corners[q]
+        if not np.all(np.isfinite(c)):
+            continue
+        nrm = np.cross(c[1] - c[0], c[3] - c[0])
+        if np.linalg.norm(nrm) == 0:
+            continue
+        off = nrm @ c[0]
+        side_src = nrm @ src_center - off
+        side_tgt = nrm @ origin - off
+        if not (side_src * side_tgt > 0):
+            continue  # back-facing or edge-on
+        denom = d @ nrm
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = (off - nrm @ origin) / denom  # = z_t because d has z_t = 1
+        pts = origin + lam[..., None] * d
+        uv, zs = src.project(pts.reshape(-1, 3))
+        uv = uv.reshape(h, w, 2)
+        zs = zs.reshape(h, w)
+        u0, v0, u1, v1 = (mesh.rects[q] - 0.5).tolist()
+        with np.errstate(invalid="ignore"):
+            hit = (
+                (lam > 0) & (zs > 0)
+                & (uv[..., 0] >= u0) & (uv[..., 0] < u1)
+                & (uv[..., 1] >= v0) & (uv[..., 1] < v1)
+                & (lam < best)
+            )
+        best[hit] = lam[hit]
+        mu[hit] = uv[..., 0][hit]
+        mv[hit] = uv[..., 1][hit]
+    cov = np.isfinite(best)
+    depth = np.where(cov, best, np.nan).astype(np.float32)
+    return SourceMaps(mu, mv, depth, cov)
