@@ -126,9 +126,9 @@ def warp_rotation(color, src: Camera, dst: Camera, *, ignore_translation: bool =
 
 
 def _depth_warp(view: View, dst: Camera) -> TimewarpFrame:
-    from . import interpolate  # the renderer's ibr.warp: quad mesh + z-buffer + hole fill
+    from .interpolate import warp  # the renderer: quad mesh + z-buffer + background hole fill
 
-    res = interpolate.warp(view, dst)
+    res = warp(view, dst)
     color = np.asarray(res.color)
     dtype = np.asarray(view.color).dtype
     if color.dtype != dtype:
