@@ -382,8 +382,8 @@ def write_depth(path, z, *, scale: float | None = None) -> None:
 # --------------------------------------------------------------------------- view files
 def _param(params: dict, key: str, where: str, *, allow_inf: bool = False) -> float:
     value = params[key]
-    if allow_inf and isinstance(value, str) and value.lower() in ("inf", "infinity"):
-        return math.inf
+    if allow_inf and (value == math.inf or (isinstance(value, str) and value.lower() in ("inf", "infinity"))):
+        return math.inf  # JSON has no inf: accept "inf" (what save_view writes) or Python's Infinity
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ValueError(f"{where}: parameter {key!r} must be a finite number, got {value!r}")
     return float(value)

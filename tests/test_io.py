@@ -420,6 +420,13 @@ def test_load_view_bad_files(good):
         load_view(good)
     edit(good, lambda d: d["depth"].update(scale=0.01))
     np.testing.assert_allclose(load_view(good).depth, 1.0, rtol=1e-6)
+    # An infinite far plane written as "inf" or as Python's non-standard Infinity literal.
+    rev = np.full((12, 20), 0.25, np.float32)  # reversed-z n / z with n = 0.5: z = 2
+    write_depth(folder / "r.exr", rev)
+    for far in ('"inf"', "Infinity"):
+        text = json.dumps({**json.loads(good.read_text()), "depth": {"path": "r.exr", "encoding": "reversed", "near": 0.5, "far": 0}})
+        good.write_text(text.replace('"far": 0', f'"far": {far}'))
+        np.testing.assert_allclose(load_view(good).depth, 2.0, rtol=1e-6)
 
 
 def test_encodings_table_is_complete():
