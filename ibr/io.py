@@ -47,7 +47,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from . import depth as _depth
-from ._validate import check_array, check_choice, check_image
+from ._validate import check_choice, check_image
 from .camera import Camera
 from .view import View
 
