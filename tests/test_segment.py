@@ -1,0 +1,244 @@
+"""Tests of ibr.segment: z', Δ² buffers, break edges and the binary splits (seed 002 §1.2).
+
+Depth maps are built analytically from a Camera and plane/saddle formulas: over a plane
+n·X = 1 (camera frame) the inverse depth is exactly 1/z = n·(x/z, y/z, 1), affine in (u, v).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ibr import _segment_kernels as K
+from ibr import segment as S
+from ibr.camera import Camera
+from ibr.depth import fixed_from_z, z_from_fixed, zprime_from_z
+
+CAM = Camera.from_fov(48, 40, hfov_deg=70)
+
+
+def plane_depth(cam: Camera, n) -> np.ndarray:
+    """Planar depth of the plane n·X = 1 seen by ``cam`` (camera frame), float64."""
+    r = cam.rays_cam()
+    return 1.0 / (r @ np.asarray(n, float))
+
+
+def inv_rows_cols(cam):
+    u, v = cam.pixel_grid()
+    return u, v
+
+
+def piecewise_scene(seed: int, h=23, w=29) -> np.ndarray:
+    """Random piecewise-planar depth with steps, creases, noise spots and NaN/inf/0 islands."""
+    rng = np.random.default_rng(seed)
+    cam = Camera.from_fov(w, h, hfov_deg=60)
+    u, v = cam.pixel_grid()
+    q = 0.5 + 0.01 * u - 0.004 * v
+    for _ in range(4):
+        u0, v0 = rng.integers(0, w - 3), rng.integers(0, h - 3)
+        u1, v1 = u0 + rng.integers(2, w - u0 + 1), v0 + rng.integers(2, h - v0 + 1)
+        a, b, c = rng.normal(0, 0.01), rng.normal(0, 0.01), rng.uniform(0.3, 1.0)
+        sl = (slice(v0, v1), slice(u0, u1))
+        q[sl] = a * u[sl] + b * v[sl] + c
+    q = np.abs(q) + 0.2
+    q += (rng.random(q.shape) < 0.03) * rng.normal(0, 0.05, q.shape)  # sparse spikes
+    z = 1.0 / q
+    z[rng.random(z.shape) < 0.04] = np.nan
+    z[rng.integers(0, h), rng.integers(0, w)] = np.inf
+    z[rng.integers(0, h), rng.integers(0, w)] = 0.0
+    return z
+
+
+def covers_valid_exactly_once(rects, z):
+    lab = np.zeros(z.shape, int)
+    for u0, v0, u1, v1 in rects:
+        assert u1 > u0 and v1 > v0
+        lab[v0:v1, u0:u1] += 1
+    valid = np.isfinite(z) & (z > 0)
+    assert np.array_equal(lab, valid.astype(int)), "rects must cover every valid pixel once, invalid none"
+
+
+# ------------------------------------------------------------------ z'
+
+
+def test_zprime_matches_seed_eq2_and_kernel():
+    z = piecewise_scene(0)
+    zp, n, f = S.zprime(z)
+    valid = np.isfinite(z) & (z > 0)
+    assert n == pytest.approx(z[valid].min()) and f == pytest.approx(z[valid].max())
+    ref = (2.0**24) * f / (f - n) * (1 - n / z[valid])
+    np.testing.assert_allclose(zp[valid], ref, rtol=1e-12, atol=1e-6)
+    assert np.isnan(zp[~valid]).all()
+    kz, inv = K.zprime_kernel(np.ascontiguousarray(z), n, f, 2.0**24)
+    np.testing.assert_allclose(kz[valid], zprime_from_z(z, near=n, far=f)[valid], rtol=1e-13)
+    assert np.array_equal(inv.astype(bool), ~valid)
+    # the nearest pixel maps to 0 and the farthest to 2^24, as a tight z-buffer would
+    assert np.nanmin(zp) == pytest.approx(0, abs=1e-6) and np.nanmax(zp) == pytest.approx(2**24)
+
+
+def test_auto_near_far_constant_depth_and_errors():
+    assert S.auto_near_far(np.full((3, 4), 7.0)) == (7.0, 14.0)
+    with pytest.raises(ValueError, match="no valid pixel"):
+        S.auto_near_far(np.full((3, 4), np.nan))
+    with pytest.raises(ValueError, match="depth: expected 2 dimensions"):
+        S.zprime(np.ones(5))
+    with pytest.raises(ValueError, match="far: expected far > near"):
+        S.zprime(np.ones((2, 2)), near=2.0, far=1.0)
+
+
+# ------------------------------------------------------------------ Δ² and measures
+
+
+def test_delta2_zero_on_planes_including_borders():
+    z = plane_depth(CAM, (0.3, -0.2, 0.4))
+    zp, _, _ = S.zprime(z)
+    d = S.delta2(zp)
+    # exactly affine z' up to float rounding of ~2^24-sized values
+    assert np.abs(d).max() < 1e-6 * 2**24 * 1e-3
+    # the stencil sign: Δ² = 4z - 4 neighbours (a bump up gives a positive value)
+    bump = np.zeros((5, 5))
+    bump[2, 2] = 1.0
+    assert S.delta2(bump)[2, 2] == 4.0 and S.delta2(bump)[1, 2] == -1.0
+
+
+def test_delta2_axis_dropped_at_border_and_next_to_nan():
+    zp = np.arange(20, dtype=float).reshape(4, 5) ** 2  # curved along both axes
+    d = S.delta2(zp)
+    # corner pixel: no complete stencil on either axis
+    assert d[0, 0] == 0
+    # interior: d2/du2 of (5v + u)^2 is 2, d2/dv2 is 50 -> -(2 + 50)
+    assert d[1, 1] == pytest.approx(-52)
+    zp[1, 2] = np.nan
+    d = S.delta2(zp)
+    assert np.isnan(d[1, 2])
+    assert d[1, 1] == pytest.approx(-50)  # u axis touches the NaN: dropped
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_measure_kernels_match_references(seed):
+    zp, _, _ = S.zprime(piecewise_scene(seed))
+    np.testing.assert_allclose(S.planarity_measure(zp, method="paper"), S._laplacian_measure_reference(zp))
+    np.testing.assert_allclose(S.planarity_measure(zp, method="separate"), S._separate_measure_reference(zp))
+
+
+def test_harmonic_saddle_fools_the_laplacian_not_separate_differences():
+    u, v = CAM.pixel_grid()
+    zp = 1000.0 * ((u - CAM.cx) ** 2 - (v - CAM.cy) ** 2)  # Δ² = 0 everywhere, not planar
+    lap = S.planarity_measure(zp, method="paper")
+    assert lap[1:-1, 1:-1].max() < 1e-6  # (border pixels see one axis only: 2000)
+    sep = S.planarity_measure(zp, method="separate")
+    assert sep[1:-1, 1:-1].min() == pytest.approx(2000.0)
+    # the mixed term catches z' = u v, which both axis terms miss
+    zp2 = 1000.0 * u * v
+    assert S.planarity_measure(zp2, method="separate")[1:-1, 1:-1].min() == pytest.approx(1000.0)
+
+
+# ------------------------------------------------------------------ break edges
+
+
+def test_break_edges_step_crease_and_plane_next_to_edge():
+    line = np.array([0, 1, 2, 3, 4, 50, 51, 52, 53], float)  # step between index 4 and 5
+    hb, vb = S.break_edges(line[None, :], 0.5)
+    assert hb[0].tolist() == [0, 0, 0, 0, 1, 0, 0, 0]
+    assert vb.shape == (0, 9)
+    crease = np.array([0, 1, 2, 3, 4, 3, 2, 1, 0], float)  # crease exactly at index 4
+    hb, _ = S.break_edges(crease[None, :], 0.5)
+    assert hb[0].tolist() == [0, 0, 0, 0, 1, 0, 0, 0]  # pixel 4 joins the low side
+    crease2 = np.array([0, 1, 2, 3, 4, 4.5, 3.5, 2.5, 1.5], float)  # crease between 4 and 5
+    hb, _ = S.break_edges(crease2[None, :], 0.3)
+    assert hb[0].tolist() == [0, 0, 0, 0, 1, 0, 0, 0]
+    nan = np.array([1, 2, np.nan, np.nan, 5, 6], float)
+    hb, _ = S.break_edges(nan[None, :], 0.5)
+    assert hb[0].tolist() == [0, 1, 0, 1, 0]
+    # same along columns
+    _, vb = S.break_edges(line[:, None], 0.5)
+    assert vb[:, 0].tolist() == [0, 0, 0, 0, 1, 0, 0, 0]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_break_edges_kernel_matches_reference(seed):
+    zp, _, _ = S.zprime(piecewise_scene(seed))
+    for thr in (1e3, 1e5, 1e6):
+        hb, vb = S.break_edges(zp, thr)
+        rh, rv = S._break_edges_reference(zp, thr)
+        assert np.array_equal(hb, rh) and np.array_equal(vb, rv)
+
+
+# ------------------------------------------------------------------ binary split
+
+
+def test_paper_split_worked_example():
+    """Seed 002 split on a 5x3 map with one pixel over threshold at (u=3, v=1), by hand:
+    scan columns from the left, split before column 3; the right part [3,5)x[0,3) is split by
+    rows: before row 1; [3,5)x[1,3) by columns: the left band is empty, from the right one clean
+    column -> split at 4; [3,4)x[1,3) by rows: from the bottom -> split at 2."""
+    bad = np.zeros((3, 5), np.uint8)
+    bad[1, 3] = 1
+    inv = np.zeros_like(bad)
+    expected = [[0, 0, 3, 3], [3, 0, 5, 1], [3, 1, 4, 2], [3, 2, 4, 3], [4, 1, 5, 3]]
+    assert S._split_pixels_reference(bad, inv, 1, 0).tolist() == expected
+    assert K.split_pixels(bad, inv, 1, 0).tolist() == expected
+
+
+def test_paper_split_min_band_and_middle_fallback():
+    bad = np.zeros((1, 8), np.uint8)
+    bad[0, [1, 6]] = 1  # bands of 1 on both sides
+    inv = np.zeros_like(bad)
+    # min_band 2: neither side is large enough -> split in the middle (u = 4), then recurse
+    got = K.split_pixels(bad, inv, 2, 0).tolist()
+    assert got == S._split_pixels_reference(bad, inv, 2, 0).tolist()
+    assert got[0][2] <= 4 and [r for r in got if r[0] == 4 or r[2] == 4]
+    # min_band 1: split before column 1 first
+    assert K.split_pixels(bad, inv, 1, 0).tolist()[0] == [0, 0, 1, 1]
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("method", ["paper", "separate", "edge"])
+def test_split_kernels_match_references_and_partition(seed, method):
+    z = piecewise_scene(seed)
+    zp, n, f = S.zprime(z)
+    for thr in (2.0**11, 2.0**15, 2.0**18):
+        got = S.split_rects(zp, method=method, threshold=thr)
+        ref = S.split_rects(zp, method=method, threshold=thr, reference=True)
+        assert got.tolist() == ref.tolist()
+        covers_valid_exactly_once(got, z)
+
+
+def test_split_rects_rejects_bad_arguments():
+    zp = np.zeros((4, 4))
+    with pytest.raises(ValueError, match="method: expected one of 'edge', 'separate', 'paper'"):
+        S.split_rects(zp, method="laplace", threshold=1)
+    with pytest.raises(ValueError, match="threshold: expected a number >= 0"):
+        S.split_rects(zp, threshold=-1)
+    with pytest.raises(ValueError, match="min_band: expected an integer >= 1"):
+        S.split_rects(zp, method="paper", threshold=1, min_band=0)
+    with pytest.raises(ValueError, match="zp: expected dtype of kind 'f'"):
+        S.split_rects(np.zeros((4, 4), int), threshold=1)
+
+
+def test_segment_options():
+    z = plane_depth(CAM, (0.1, 0.05, 0.3))
+    with pytest.raises(ValueError, match="give at most one"):
+        S.segment(z, camera=CAM, threshold=1.0, max_error_px=1.0)
+    with pytest.raises(ValueError, match="camera: needed"):
+        S.segment(z)
+    with pytest.raises(ValueError, match="max_error_px: expected a positive number"):
+        S.segment(z, camera=CAM, max_error_px=0)
+    with pytest.raises(ValueError, match="depth: no valid pixel"):
+        S.segment(np.full((3, 3), np.nan), camera=Camera.from_fov(3, 3, hfov_deg=60))
+    seg = S.segment(z, camera=CAM)
+    assert seg.max_error_px == 0.5
+    assert seg.baseline == pytest.approx(0.05 * np.median(z))
+    assert seg.tolerance_inv_depth == pytest.approx(0.5 / (CAM.fx * seg.baseline))
+
+
+def test_tolerance_from_error_px_worked_example():
+    assert S.tolerance_from_error_px(0.5, focal_px=1000, baseline=0.1) == pytest.approx(0.005)
+    # derivation: moving the camera by b along x shifts a pixel by f b / z; check with the Camera
+    cam = Camera.from_fov(64, 48, hfov_deg=60)
+    b, z1, z2 = 0.2, 3.0, 3.05
+    moved = cam.translated([b, 0, 0])
+    p1 = cam.unproject(np.array([10.0, 20.0]), z1)
+    p2 = cam.unproject(np.array([10.0, 20.0]), z2)
+    shift = abs(moved.project(p1)[0][0] - moved.project(p2)[0][0])
+    assert shift == pytest.approx(cam.fx * b * abs(1 / z1 - 1 / z2), rel=1e-9)
