@@ -144,3 +144,28 @@ def test_predistort_stereo_per_eye_centers():
     # the impulse sits on the left lens's center: it stays put there, but moves in the right eye
     assert l_out[20, 30] == pytest.approx(1.0)
     assert r_out[20, 30] < 0.5
+
+
+def test_cli_distort(tmp_path):
+    from cli import main
+    from ibr.io import read_image, write_image
+
+    rng = np.random.default_rng(2)
+    img = rng.integers(0, 256, (32, 48, 3), dtype=np.uint8)
+    write_image(tmp_path / "in.png", img)
+    assert main(["distort", str(tmp_path / "in.png"), "--c1", "0.2", "--c2", "0.05", "-o", str(tmp_path / "o.png")]) == 0
+    np.testing.assert_array_equal(read_image(tmp_path / "o.png"), predistort(img, RadialDistortion(0.2, 0.05, 1.5)))
+    assert main(["distort", str(tmp_path / "o.png"), "--c1", "0.2", "--c2", "0.05", "--inverse",
+                 "-o", str(tmp_path / "i.png")]) == 0
+    assert main(["distort", str(tmp_path / "in.png"), "--c1", "0.2", "--sbs", "--centers", "12", "15.5", "11", "15.5",
+                 "-o", str(tmp_path / "s.png")]) == 0
+    left, _ = predistort_stereo(img[:, :24], img[:, 24:], RadialDistortion(0.2, 0.0, 1.5),
+                                centers_px=((12, 15.5), (11, 15.5)))
+    np.testing.assert_array_equal(read_image(tmp_path / "s.png")[:, :24], left)
+    # a non-invertible lens, the input as output, a missing input
+    assert main(["distort", str(tmp_path / "in.png"), "--c1", "-0.9", "-o", str(tmp_path / "x.png")]) == 1
+    assert main(["distort", str(tmp_path / "in.png"), "--c1", "0.1", "-o", str(tmp_path / "in.png")]) == 1
+    assert main(["distort", str(tmp_path / "nope.png"), "--c1", "0.1", "-o", str(tmp_path / "x.png")]) == 1
+    assert main(["distort", str(tmp_path / "in.png"), "-o", str(tmp_path / "x.png")]) == 2  # --c1 missing
+    assert not (tmp_path / "x.png").exists()
+    np.testing.assert_array_equal(read_image(tmp_path / "in.png"), img)

@@ -416,3 +416,31 @@ def test_dubois_anaglyph():
 def _lin(u8):
     x = u8.astype(np.float64) / 255
     return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+
+
+# ---------------------------------------------------------------------- CLI
+def test_cli_stereo(tmp_path):
+    from cli import main
+    from ibr.io import read_image, save_view
+
+    view = _plane_view(slope=0.002)
+    u8 = View((view.color * 255).round().astype(np.uint8), view.depth, view.camera)
+    src = save_view(u8, tmp_path / "v.json")
+    assert main(["stereo", str(src), "--mode", "anaglyph", "-o", str(tmp_path / "a.png")]) == 0
+    a = read_image(tmp_path / "a.png")
+    e, f = auto_stereo(view.depth)
+    pair = stereo_pair(u8, e=e, f=f)
+    np.testing.assert_array_equal(a, anaglyph(pair.left, pair.right))
+    assert main(["stereo", str(src), "--e", "0.05", "--f", "4", "--mode", "separate", "--holes",
+                 "-o", str(tmp_path / "p.png")]) == 0
+    left = read_image(tmp_path / "p_left.png")
+    np.testing.assert_array_equal(left, stereo_pair(u8, e=0.05, f=4.0).left)
+    assert (tmp_path / "p_right_holes.png").is_file()
+    assert main(["stereo", str(src), "--mode", "sbs", "-o", str(tmp_path / "s.png")]) == 0
+    assert read_image(tmp_path / "s.png").shape == (48, 128, 3)
+    # errors: both --auto and --e/--f (1), unknown mode (2), missing file (1), --e without --f (1)
+    assert main(["stereo", str(src), "--auto", "--e", "1", "--f", "2", "-o", str(tmp_path / "x.png")]) == 1
+    assert main(["stereo", str(src), "--mode", "hologram", "-o", str(tmp_path / "x.png")]) == 2
+    assert main(["stereo", str(tmp_path / "missing.json"), "-o", str(tmp_path / "x.png")]) == 1
+    assert main(["stereo", str(src), "--e", "0.1", "-o", str(tmp_path / "x.png")]) == 1
+    assert not (tmp_path / "x.png").exists()

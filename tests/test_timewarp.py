@@ -151,3 +151,30 @@ def test_timewarp_bad_input():
         warp_rotation(np.zeros((5, 5, 3)), cam, cam)
     with pytest.raises(ValueError, match="every"):
         upconvert(lambda c: view, [cam], every=0)
+
+
+def test_cli_timewarp(tmp_path):
+    import json
+
+    from cli import main
+    from ibr.io import read_image, save_view
+
+    disp = Camera.from_fov(48, 36, hfov_deg=60)
+    band = guard_band_camera(disp, margin_px=6)
+    img = (_direction_image(band) * 255).round().astype(np.uint8)
+    depth = np.full(band.shape, 3.0, np.float32)
+    src = save_view(View(img, depth, band), tmp_path / "band.json")
+    dst = _rotated(disp, yaw=2, pitch=1)
+    poses = [disp.world_from_cam.tolist(), dst.world_from_cam.tolist(), dst.to_dict()]
+    (tmp_path / "poses.json").write_text(json.dumps({"poses": poses}))
+    out = tmp_path / "frames"
+    assert main(["timewarp", str(src), "--poses", str(tmp_path / "poses.json"), "--margin", "6", "-o", str(out)]) == 0
+    f0 = read_image(out / "frame_0000.png")
+    np.testing.assert_array_equal(f0, img[6:42, 6:54])  # same pose: the display crop
+    f1 = read_image(out / "frame_0001.png")
+    np.testing.assert_array_equal(f1, warp_rotation(img, band, dst).color)
+    np.testing.assert_array_equal(read_image(out / "frame_0002.png"), f1)
+    (tmp_path / "bad.json").write_text("[[1, 2, 3]]")
+    assert main(["timewarp", str(src), "--poses", str(tmp_path / "bad.json"), "-o", str(out)]) == 1
+    assert main(["timewarp", str(src), "--poses", str(tmp_path / "none.json"), "-o", str(out)]) == 1
+    assert main(["timewarp", str(src), "--poses", str(tmp_path / "poses.json"), "--margin", "30", "-o", str(out)]) == 1

@@ -1,0 +1,99 @@
+"""``ibr stereo``: a stereo pair from one RGB-D view file, packed for a display.
+
+The interaxial e and zero-parallax distance f are given (``--e --f``), or chosen from the view's
+depth percentiles within a parallax visual-angle limit (``--auto``, the default; ``--f`` alone
+picks the largest comfortable e for that f). ``--mode separate`` writes OUT with ``_left`` and
+``_right`` inserted before the extension; the other modes write one image.
+"""
+
+from __future__ import annotations
+
+HELP = "stereo pair from one RGB-D view: anaglyph, Dubois, side-by-side, top-bottom, interleaved, separate"
+
+MODES = ("anaglyph", "dubois", "sbs", "sbs-half", "tb", "tb-half", "interleaved", "separate")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("view", metavar="VIEW.json", help="view file with color, depth and camera")
+    parser.add_argument("--e", type=float, default=None, help="interaxial distance (scene units)")
+    parser.add_argument("--f", type=float, default=None, help="zero-parallax distance (scene units)")
+    parser.add_argument("--auto", action="store_true", help="choose e and f from the depth (default)")
+    parser.add_argument("--max-angle", type=float, default=1.6, metavar="DEG",
+                        help="parallax visual-angle limit for --auto (default: %(default)s)")
+    parser.add_argument("--source", choices=("center", "left", "right"), default="center",
+                        help="the input view is between the eyes (both new) or one eye (default: %(default)s)")
+    parser.add_argument("--method", choices=("pixel", "mesh", "splat"), default="pixel",
+                        help="pixel: seed 003 method 2 (fast); mesh: quad-mesh renderer (method 1)")
+    parser.add_argument("--mode", choices=MODES, default="anaglyph", help="output format (default: %(default)s)")
+    parser.add_argument("--holes", action="store_true", help="also write the disocclusion masks (*_holes.png)")
+    parser.add_argument("-o", "--out", required=True, metavar="OUT", help="output image (.png, .jpg, .tif, .exr)")
+
+
+def display_image(arr, path):
+    """Color for writing to ``path``: float [0, 1] becomes uint8 for .png/.jpg (clipped)."""
+    import numpy as np
+
+    a = np.asarray(arr)
+    if a.dtype.kind == "f" and path.suffix.lower() in (".png", ".jpg", ".jpeg"):
+        return np.clip(np.rint(a * 255), 0, 255).astype(np.uint8)
+    return a
+
+
+def _suffixed(path, tag):
+    return path.with_name(f"{path.stem}_{tag}{path.suffix}")
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from commands._common import info
+    from ibr.io import load_view, write_image
+    from ibr.stereo import auto_stereo, comfort, max_interaxial_for_range
+    from ibr.stereo_pair import pack_stereo, stereo_pair
+
+    out = Path(args.out)
+    if not out.parent.is_dir() and str(out.parent):
+        raise FileNotFoundError(f"--out: folder {out.parent} does not exist")
+    if args.auto and (args.e is not None or args.f is not None):
+        raise ValueError("--auto: give either --auto or --e/--f, not both")
+    if args.e is not None and args.f is None:
+        raise ValueError("--e: needs --f as well (or use --auto, or --f alone)")
+    view = load_view(args.view)
+    depth = view.require_depth("ibr stereo")
+    valid = depth[np.isfinite(depth)]
+    if valid.size == 0:
+        raise ValueError(f"{args.view}: the depth has no valid pixel")
+    z_near, z_far = np.percentile(valid, [1, 99])
+    if args.f is None:
+        e, f = auto_stereo(depth, max_angle_deg=args.max_angle)
+        info(f"stereo: auto e = {e:.6g}, f = {f:.6g} (depth 1st-99th percentile {z_near:.4g}..{z_far:.4g})")
+    else:
+        f = args.f
+        e = args.e if args.e is not None else max_interaxial_for_range(z_near, z_far, f, max_angle_deg=args.max_angle)
+        info(f"stereo: e = {e:.6g}, f = {f:.6g}")
+    rep = comfort(z_near, z_far, e=e, f=f, max_angle_deg=args.max_angle)
+    info(f"stereo: parallax {rep.crossed_angle_deg:+.3f} .. {rep.uncrossed_angle_deg:+.3f} deg "
+         f"(limit {rep.angle_limit_deg} deg); nearest >= f/2: {rep.nearest_ok}"
+         + ("" if rep.ok else "  WARNING: outside the comfort limits"))
+    pair = stereo_pair(view, e=e, f=f, source=args.source, method=args.method)
+    info(f"stereo: disocclusions filled: left {pair.left_holes.mean():.2%}, right {pair.right_holes.mean():.2%}")
+    left, right = display_image(pair.left, out), display_image(pair.right, out)
+    packed = pack_stereo(left, right, args.mode)
+    written = []
+    if args.mode == "separate":
+        for tag, img in zip(("left", "right"), packed):
+            write_image(_suffixed(out, tag), img)
+            written.append(_suffixed(out, tag))
+    else:
+        write_image(out, packed)
+        written.append(out)
+    if args.holes:
+        for tag, m in (("left", pair.left_holes), ("right", pair.right_holes)):
+            p = _suffixed(out.with_suffix(".png"), f"{tag}_holes")
+            write_image(p, m.astype(np.uint8) * 255)
+            written.append(p)
+    for p in written:
+        info(f"stereo: wrote {p}")
+    return 0
