@@ -422,24 +422,82 @@ def label_rects(rects, h, w):
 
 
 @njit(cache=True)
-def split_edges(zp, invalid, hb, vb, tol, first_dir):
+def edge_prefix(zp, thr):
+    """Prefix sums of the break edges of :func:`edge_breaks`, computed in one pass from z'.
+
+    Returns ``ch`` (H+1, W-1) int32 with ``ch[v, u] = sum(hb[:v, u])`` (breaks across the vertical
+    grid line between columns u and u+1, rows above v) and ``rv`` (W+1, H-1) int32 with
+    ``rv[u, v] = sum(vb[v, :u])`` (stored transposed so a scan over rows reads contiguous memory).
+    """
+    h, w = zp.shape
+    nan = np.nan
+    ch = np.zeros((h + 1, max(w - 1, 0)), np.int32)
+    rv = np.zeros((w + 1, max(h - 1, 0)), np.int32)
+    for v in range(h):
+        for u in range(w - 1):
+            zm2 = zp[v, u - 2] if u >= 2 else nan
+            zm1 = zp[v, u - 1] if u >= 1 else nan
+            zp2 = zp[v, u + 2] if u + 2 < w else nan
+            ch[v + 1, u] = ch[v, u] + _pair_break(zm2, zm1, zp[v, u], zp[v, u + 1], zp2, thr)
+    for v in range(h - 1):
+        acc = 0
+        for u in range(w):
+            zm2 = zp[v - 2, u] if v >= 2 else nan
+            zm1 = zp[v - 1, u] if v >= 1 else nan
+            zp2 = zp[v + 2, u] if v + 2 < h else nan
+            acc += _pair_break(zm2, zm1, zp[v, u], zp[v + 1, u], zp2, thr)
+            rv[u + 1, v] = acc
+    return ch, rv
+
+
+@njit(cache=True)
+def _quick_reject(zp, u0, v0, u1, v1, tol):
+    """True when no plane can fit the rect within ``tol`` (exact necessary condition).
+
+    For any affine f, f(a) + f(b) = f(c) + f(d) whenever a + b = c + d; with residuals bounded by
+    tol the same sums differ by at most 4 tol. Checks the corner twist and the corners against the
+    middle pixels, so creases and curvature are rejected without a full pass over the rect.
+    """
+    ua = u0
+    ub = u1 - 1
+    va = v0
+    vb = v1 - 1
+    lim = 4.0 * tol
+    if abs(zp[va, ua] + zp[vb, ub] - zp[va, ub] - zp[vb, ua]) > lim:
+        return True
+    um = (ua + ub) // 2
+    vm = (va + vb) // 2
+    un = ua + ub - um
+    vn = va + vb - vm
+    if abs(zp[va, ua] + zp[vb, ub] - zp[vm, um] - zp[vn, un]) > lim:
+        return True
+    if abs(zp[va, ub] + zp[vb, ua] - zp[vm, un] - zp[vn, um]) > lim:
+        return True
+    if abs(zp[va, ua] + zp[va, ub] - zp[va, um] - zp[va, un]) > lim:
+        return True
+    if abs(zp[vb, ua] + zp[vb, ub] - zp[vb, um] - zp[vb, un]) > lim:
+        return True
+    if abs(zp[va, ua] + zp[vb, ua] - zp[vm, ua] - zp[vn, ua]) > lim:
+        return True
+    if abs(zp[va, ub] + zp[vb, ub] - zp[vm, ub] - zp[vn, ub]) > lim:
+        return True
+    return False
+
+
+@njit(cache=True)
+def split_edges(zp, ch, rv, tol, first_dir):
     """Edge-aware, error-bounded binary split.
 
-    A region is dropped when all its pixels are invalid. Otherwise, if it holds break edges
-    (``hb``/``vb``, see :func:`edge_breaks`) it is split along the grid line that carries the most
-    break edges inside the region (ties: nearest the middle), preferring the alternating
-    direction when that direction holds any break. A break-free region (necessarily all valid) is
-    kept when it is one pixel or when the least-squares plane of ``zp`` over it has max |residual|
-    <= ``tol``; else it is split in the middle of its longer side.
+    ``ch``/``rv`` are the break-edge prefix sums of :func:`edge_prefix`. A region with break edges
+    inside is split along the grid line that carries the most of them (ties: nearest the middle),
+    in the alternating direction when that direction holds any break, else in the other one. A
+    break-free region is either all invalid (dropped: an invalid/valid pair is always a break) or
+    all valid; it is kept when it is one pixel or when the least-squares plane of ``zp`` over it
+    has max |residual| <= ``tol``, else split in the middle of its longer side.
 
     Returns (Q, 4) int32 rects in depth-first order (low child first).
     """
     h, w = zp.shape
-    si = _sat(invalid)
-    sh = _sat(hb)  # (H+1, W) : hb has W-1 columns
-    sv = _sat(vb)  # (H, W+1)
-    ch = _colcum(hb)  # (H+1, W-1)
-    rv = _rowcum_t(vb)  # (W+1, H-1)
     cap = h * w + 1
     out = np.empty((cap, 4), np.int32)
     stack = np.empty((cap + 1, 5), np.int32)
@@ -457,35 +515,49 @@ def split_edges(zp, invalid, hb, vb, tol, first_dir):
         u1 = stack[top, 2]
         v1 = stack[top, 3]
         d = stack[top, 4]
-        area = (u1 - u0) * (v1 - v0)
-        if _box(si, u0, v0, u1, v1) == area:
-            continue
-        nh = _box(sh, u0, v0, u1 - 1, v1)  # breaks across vertical grid lines
-        nv = _box(sv, u0, v0, u1, v1 - 1)  # breaks across horizontal grid lines
-        split = -1
+        # break counts per grid line inside the region, best line of each direction
+        nh = 0
+        best_h = 0
+        dist_h = 1 << 30
+        split_h = -1
+        mid2 = u0 + u1
+        for k in range(u0 + 1, u1):
+            cnt = ch[v1, k - 1] - ch[v0, k - 1]
+            if cnt > 0:
+                nh += cnt
+                dist = abs(2 * k - mid2)
+                if cnt > best_h or (cnt == best_h and dist < dist_h):
+                    best_h = cnt
+                    dist_h = dist
+                    split_h = k
+        nv = 0
+        best_v = 0
+        dist_v = 1 << 30
+        split_v = -1
+        mid2 = v0 + v1
+        for k in range(v0 + 1, v1):
+            cnt = rv[u1, k - 1] - rv[u0, k - 1]
+            if cnt > 0:
+                nv += cnt
+                dist = abs(2 * k - mid2)
+                if cnt > best_v or (cnt == best_v and dist < dist_v):
+                    best_v = cnt
+                    dist_v = dist
+                    split_v = k
         if nh + nv > 0:
             if d == 0 and nh == 0:
                 d = 1
             elif d == 1 and nv == 0:
                 d = 0
-            lo = u0 if d == 0 else v0
-            hi = u1 if d == 0 else v1
-            mid2 = lo + hi  # twice the middle, compare 2k with it
-            best = 0
-            bestdist = 1 << 30
-            for k in range(lo + 1, hi):
-                if d == 0:
-                    cnt = ch[v1, k - 1] - ch[v0, k - 1]
-                else:
-                    cnt = rv[u1, k - 1] - rv[u0, k - 1]
-                if cnt > 0:
-                    dist = abs(2 * k - mid2)
-                    if cnt > best or (cnt == best and dist < bestdist):
-                        best = cnt
-                        bestdist = dist
-                        split = k
+            split = split_h if d == 0 else split_v
         else:
-            if area == 1 or rect_fit_max_residual(zp, u0, v0, u1, v1, tol) <= tol:
+            if not np.isfinite(zp[v0, u0]):
+                continue  # break-free and invalid: the whole region is invalid
+            area = (u1 - u0) * (v1 - v0)
+            if area == 1 or (
+                not _quick_reject(zp, u0, v0, u1, v1, tol)
+                and rect_fit_max_residual(zp, u0, v0, u1, v1, tol) <= tol
+            ):
                 out[n, 0] = u0
                 out[n, 1] = v0
                 out[n, 2] = u1

@@ -347,16 +347,17 @@ def split_rects(
         raise ValueError(f"threshold: expected a number >= 0 (z' units), got {threshold!r}")
     if isinstance(min_band, bool) or int(min_band) != min_band or min_band < 1:
         raise ValueError(f"min_band: expected an integer >= 1, got {min_band!r}")
-    invalid = (~np.isfinite(z)).astype(np.uint8)
     if method == "edge":
         tol = thr if tolerance is None else float(tolerance)
         if not tol >= 0:
             raise ValueError(f"tolerance: expected a number >= 0 (z' units), got {tolerance!r}")
         if reference:
+            invalid = (~np.isfinite(z)).astype(np.uint8)
             hb, vb = _break_edges_reference(z, thr)
             return _split_edges_reference(z, invalid, hb, vb, tol, 0)
-        hb, vb = _k.edge_breaks(z, thr)
-        return _k.split_edges(z, invalid, hb, vb, tol, 0)
+        ch, rv = _k.edge_prefix(z, thr)
+        return _k.split_edges(z, ch, rv, tol, 0)
+    invalid = (~np.isfinite(z)).astype(np.uint8)
     if reference:
         m = _laplacian_measure_reference(z) if method == "paper" else _separate_measure_reference(z)
         return _split_pixels_reference(m >= thr, invalid, int(min_band), 0)

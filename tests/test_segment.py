@@ -162,6 +162,10 @@ def test_break_edges_kernel_matches_reference(seed):
         hb, vb = S.break_edges(zp, thr)
         rh, rv = S._break_edges_reference(zp, thr)
         assert np.array_equal(hb, rh) and np.array_equal(vb, rv)
+        # the fused prefix sums the split kernel reads
+        ch, rvt = K.edge_prefix(zp, thr)
+        assert np.array_equal(ch[1:], np.cumsum(rh, axis=0)) and not ch[0].any()
+        assert np.array_equal(rvt[1:], np.cumsum(rv, axis=1).T) and not rvt[0].any()
 
 
 # ------------------------------------------------------------------ binary split
