@@ -181,13 +181,11 @@ def _to_dtype(img: np.ndarray, dtype) -> np.ndarray:
     return img.astype(dtype)
 
 
-def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float):
+def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, mesh=None):
     src = view.camera
     if method == "mesh":
-        from .mesh import build_mesh
         from .render import render_mesh
 
-        mesh = build_mesh(view)
         layer = render_mesh(mesh, view.color, eye_cam)
         return layer.color, layer.depth, layer.coverage
     # method 2: eye = source translated along its x axis with a shifted principal point
@@ -205,7 +203,7 @@ def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float):
 
 
 def stereo_pair(view: View, *, e: float, f: float, source: str = "center", method: str = "pixel",
-                max_jump_px: float = 1.0) -> StereoPair:
+                max_jump_px: float = 1.0, mesh_options: dict | None = None) -> StereoPair:
     """Synthesize a stereo pair from one RGB-D view (seed 003, step 3).
 
     Parameters
@@ -223,19 +221,26 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
         ``"splat"``: method 2 literally (nearest-pixel copies; cracks are filled as holes).
     max_jump_px : float
         ``"pixel"`` only: neighbours whose parallax differs by more than this are not connected.
+    mesh_options : dict, optional
+        ``"mesh"`` only: options of :func:`ibr.mesh.build_mesh` (level of detail).
     """
     if not isinstance(view, View):
         raise TypeError(f"view: expected a View, got {type(view).__name__}")
     view.require_depth("a stereo pair")
     check_choice("method", method, METHODS)
     left_cam, right_cam = stereo_cameras(view.camera, e=e, f=f, source=source)
+    mesh = None
+    if method == "mesh":
+        from .mesh import build_mesh
+
+        mesh = build_mesh(view, **(mesh_options or {}))  # one mesh serves both eyes
     out = {}
     for eye, cam in (("left", left_cam), ("right", right_cam)):
         if cam is view.camera:  # the kept eye: the original frame, untouched
             col = np.asarray(view.color)
             out[eye] = (col.copy(), view.depth.copy(), np.zeros(view.shape, bool))
             continue
-        c, d, cov = _render_eye(view, cam, method, max_jump_px)
+        c, d, cov = _render_eye(view, cam, method, max_jump_px, mesh)
         c, d, holes = fill_background(c, d, cov)
         out[eye] = (_to_dtype(c, np.asarray(view.color).dtype), d, holes)
     return StereoPair(out["left"][0], out["right"][0], out["left"][2], out["right"][2],

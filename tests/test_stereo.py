@@ -284,14 +284,16 @@ def test_stereo_cameras_sources():
     assert l is cam
 
 
-@pytest.mark.parametrize("name", ["room", "clutter", "grazing"])
-def test_stereo_pair_matches_ground_truth(name):
-    """Method 2 pair vs ray-traced eye cameras: PSNR >= 35 dB outside disocclusions."""
+@pytest.mark.parametrize("name, method", [("room", "pixel"), ("clutter", "pixel"), ("grazing", "pixel"),
+                                          ("clutter", "mesh")])
+def test_stereo_pair_matches_ground_truth(name, method):
+    """Method 2 (pixel) and method 1 (mesh) pairs vs ray-traced eye cameras: PSNR >= 35 dB
+    outside disocclusions, at the comfort limit (auto e, f: parallax +-1.6 degrees)."""
     scene = synth.make_scene(name)
     cam, _ = synth.scene_cameras(name, width=256, height=192)
     view = synth.render(scene, cam, supersample=3)
     e, f = auto_stereo(view.depth)
-    pair = stereo_pair(view, e=e, f=f)
+    pair = stereo_pair(view, e=e, f=f, method=method)
     for img, holes, ecam in ((pair.left, pair.left_holes, pair.left_camera),
                              (pair.right, pair.right_holes, pair.right_camera)):
         gt = synth.render(scene, ecam, supersample=3)
@@ -301,7 +303,8 @@ def test_stereo_pair_matches_ground_truth(name):
         assert psnr >= 35.0, psnr
         # geometry: depth of every non-hole pixel equals the ray-traced depth (edge pixels aside)
         dz = np.abs((pair.left_depth if img is pair.left else pair.right_depth)[ok] - gt.depth[ok]) / gt.depth[ok]
-        assert np.percentile(dz, 95) < 1e-3
+        # method 2 keeps the source depth per pixel; the quad mesh approximates it (level of detail)
+        assert np.percentile(dz, 95 if method == "pixel" else 50) < 1e-3
 
 
 def test_stereo_pair_vertical_parallax_zero_and_kept_eye():
