@@ -73,8 +73,7 @@ def _clip_edge(xa, ya, za, xb, yb, zb, eps, kt, lim, umin, umax, vmin, vmax):
     return umin, umax, vmin, vmax
 
 
-@njit(cache=True, parallel=True)
-def setup_quads(rects, planes, ks, r, t, kt_inv, kt, width, height, coef, bbox):
+def _setup_quads(rects, planes, ks, r, t, kt_inv, kt, width, height, coef, bbox):
     """Per-quad homography rows and target bounding boxes.
 
     ks, kt: (4,) fx, fy, cx, cy of source / target; r (3,3), t (3,) src_from_tgt; kt_inv (3,3).
@@ -150,6 +149,10 @@ def setup_quads(rects, planes, ks, r, t, kt_inv, kt, width, height, coef, bbox):
         bbox[q, 3] = vhi
 
 
+setup_quads = njit(cache=True, parallel=True)(_setup_quads)
+setup_quads_serial = njit(cache=True)(_setup_quads)
+
+
 @njit(cache=True)
 def _span(e0, e1, e2, v, strict, lo, hi):
     """Narrow the integer range [lo, hi] to u with e0*u + e1*v + e2 (>= 0 or > 0 if strict),
@@ -199,21 +202,26 @@ def bucket_bands(bbox, height, nbands):
     return count, quads
 
 
-@njit(cache=True, parallel=True)
-def raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quads, inv_z, map_u, map_v, quad_id):
-    """Z-buffered rasterization of quads into source-coordinate maps.
+def _raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quads, far_coord,
+                  inv_z, map_u, map_v, quad_id, depth, coverage):
+    """Z-buffered rasterization of quads into source-coordinate maps, one band of target rows
+    per parallel task (each band owns its rows: no write races).
 
-    inv_z (H, W) float64 must be zero-initialized; map_u/map_v (H, W) float32 and quad_id (H, W)
-    int32 receive the source pixel coordinates and quad index of the nearest quad per target
-    pixel (untouched where uncovered). clamp (Q, 4) uint8 flags [left, top, right, bottom]: when
-    set, the sample position is clamped to the rect's outer pixel *centers* on that side so that
-    bilinear sampling never reads across a depth edge.
+    inv_z (H, W) float64 scratch z-buffer of 1/z_t; map_u/map_v (H, W) float32 and quad_id
+    (H, W) int32 receive the source pixel coordinates and quad index of the nearest quad per
+    target pixel (far_coord / -1 where uncovered); depth (H, W) float32 = z_t (NaN uncovered),
+    coverage (H, W) bool. clamp (Q, 4) uint8 flags [left, top, right, bottom]: when set, the
+    sample position is clamped to the rect's outer pixel *centers* on that side so that bilinear
+    sampling never reads across a depth edge.
     """
     nbands = band_start.shape[0] - 1
     rows_per_band = (height + nbands - 1) // nbands
     for band in prange(nbands):
         r0 = band * rows_per_band
         r1 = min(height, r0 + rows_per_band)
+        for v in range(r0, r1):
+            for u in range(width):
+                inv_z[v, u] = 0.0
         for k in range(band_start[band], band_start[band + 1]):
             q = band_quads[k]
             ulo, vlo, uhi, vhi = bbox[q, 0], bbox[q, 1], bbox[q, 2], bbox[q, 3]
@@ -281,23 +289,22 @@ def raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quads
                     map_u[v, u] = us
                     map_v[v, u] = vs
                     quad_id[v, u] = q
+        for v in range(r0, r1):
+            for u in range(width):
+                iz = inv_z[v, u]
+                if iz > 0.0:
+                    depth[v, u] = 1.0 / iz
+                    coverage[v, u] = True
+                else:
+                    depth[v, u] = np.nan
+                    coverage[v, u] = False
+                    map_u[v, u] = far_coord
+                    map_v[v, u] = far_coord
+                    quad_id[v, u] = -1
 
 
-@njit(cache=True, parallel=True)
-def finish_maps(inv_z, map_u, map_v, depth, coverage, far_coord):
-    """depth = 1/inv_z (float32, NaN where uncovered); uncovered maps point outside the image."""
-    h, w = inv_z.shape
-    for v in prange(h):
-        for u in range(w):
-            iz = inv_z[v, u]
-            if iz > 0.0:
-                depth[v, u] = 1.0 / iz
-                coverage[v, u] = True
-            else:
-                depth[v, u] = np.nan
-                coverage[v, u] = False
-                map_u[v, u] = far_coord
-                map_v[v, u] = far_coord
+raster_quads = njit(cache=True, parallel=True)(_raster_quads)
+raster_quads_serial = njit(cache=True)(_raster_quads)
 
 
 @njit(cache=True)
@@ -307,7 +314,7 @@ def _off_plane(inv, uu, vv, a, b, c, rel_tol):
     return not (q > 0.0) or abs(q - p) > rel_tol * abs(p)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def clamp_flags(rects, planes, inv, rel_tol, out):
     """Per quad and side [left, top, right, bottom]: 1 when any source pixel just outside that
     side is outside the image, has no depth (``inv <= 0``), or has an inverse depth ``inv`` off
@@ -342,7 +349,7 @@ def clamp_flags(rects, planes, inv, rel_tol, out):
 
 
 # ------------------------------------------------------------------------- forward warp
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def project_pixels(depth, ks, r, t, kt, tu, tv, tz):
     """Per source pixel: target pixel position (tu, tv) and planar target depth tz
     (NaN where the source depth is invalid or the point is behind the target camera).
@@ -401,7 +408,7 @@ def splat(tu, tv, tz, inverse, zbuf, map_u, map_v):
                     map_v[iv, iu] = v
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def finish_splat(zbuf, map_u, map_v, depth, coverage, far_coord):
     h, w = zbuf.shape
     for v in prange(h):
@@ -477,7 +484,7 @@ def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, dept
 
 
 # ------------------------------------------------------------------------- hole filling
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def background_fill(color, depth, holes, rel_tol, max_dist, is_int, filled):
     """Fill hole pixels from the *farther* of their nearest non-hole neighbours (in place).
 

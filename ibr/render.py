@@ -36,6 +36,10 @@ __all__ = ["Layer", "SourceMaps", "render_mesh", "rasterize_mesh", "sample_maps"
 #: Sample-footprint modes of :func:`render_mesh`.
 FOOTPRINTS = ("surface", "quad", "free")
 
+# Work sizes below which a serial kernel beats waking the second thread.
+_PARALLEL_QUADS = 8192
+_PARALLEL_PIXELS = 64 * 64
+
 # A source coordinate far outside every image: remap's constant border returns 0 there.
 _FAR = np.float32(-1.0e6)
 
@@ -172,18 +176,19 @@ def rasterize_mesh(mesh, camera: Camera, *, footprint: str = "surface", depth_to
     nq = len(mesh.rects)
     coef = np.empty((nq, 12), np.float64)
     bbox = np.empty((nq, 4), np.int32)
-    inv_z = np.zeros((h, w), np.float64)
+    inv_z = np.empty((h, w), np.float64)
     map_u = np.empty((h, w), np.float32)
     map_v = np.empty((h, w), np.float32)
     quad_id = np.empty((h, w), np.int32)
     depth = np.empty((h, w), np.float32)
     coverage = np.empty((h, w), np.bool_)
-    if nq:
-        _k.setup_quads(mesh.rects, mesh.inv_depth_planes, _intrinsics(src), r, t, kt_inv, kt, w, h, coef, bbox)
-        flags = _clamp_flags(mesh, footprint, depth_tol)
-        start, order = _k.bucket_bands(bbox, h, _nbands(h))
-        _k.raster_quads(mesh.rects, coef, bbox, flags, w, h, start, order, inv_z, map_u, map_v, quad_id)
-    _k.finish_maps(inv_z, map_u, map_v, depth, coverage, _FAR)
+    setup = _k.setup_quads if nq >= _PARALLEL_QUADS else _k.setup_quads_serial
+    setup(mesh.rects, mesh.inv_depth_planes, _intrinsics(src), r, t, kt_inv, kt, w, h, coef, bbox)
+    flags = _clamp_flags(mesh, footprint, depth_tol)
+    nbands = _nbands(h)
+    start, order = _k.bucket_bands(bbox, h, nbands)
+    raster = _k.raster_quads if h * w >= _PARALLEL_PIXELS else _k.raster_quads_serial
+    raster(mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, inv_z, map_u, map_v, quad_id, depth, coverage)
     return SourceMaps(map_u, map_v, depth, coverage)
 
 
@@ -261,10 +266,11 @@ def render_mesh(
 def rasterize_mesh_reference(mesh, camera: Camera) -> SourceMaps:
     """Slow numpy reference of :func:`rasterize_mesh` (``footprint="free"``) for tests.
 
-    Independent geometry: each quad's plane is rebuilt in the *world* frame from three of its
-    corners, every target pixel ray is intersected with it, the hit is projected into the source
-    camera and kept if it falls in the rect's half-open pixel-edge outline, lies in front of both
-    cameras, and the target camera is on the front side of the plane. Nearest hit wins.
+    Independent geometry: each quad's plane ``n . X_src = 1`` is moved to the *world* frame,
+    every target pixel ray is intersected with it there, the hit is projected into the source
+    camera with :meth:`Camera.project` and kept if it falls in the rect's half-open pixel-edge
+    outline, lies in front of both cameras, and the target camera is on the front side of the
+    plane (the side of the source camera). Nearest hit wins.
     """
     h, w = camera.shape
     origin, _ = camera.rays_world()
@@ -273,20 +279,14 @@ def rasterize_mesh_reference(mesh, camera: Camera) -> SourceMaps:
     mu = np.full((h, w), np.float32(_FAR), np.float32)
     mv = np.full((h, w), np.float32(_FAR), np.float32)
     src = mesh.camera
-    corners = mesh.corners_cam @ src.world_from_cam[:3, :3].T + src.world_from_cam[:3, 3]
-    src_center = src.position
+    rot, src_center = src.world_from_cam[:3, :3], src.position
     for q in range(len(mesh.rects)):
-        c = corners[q]
-        if not np.all(np.isfinite(c)):
-            continue
-        nrm = np.cross(c[1] - c[0], c[3] - c[0])
-        if np.linalg.norm(nrm) == 0:
-            continue
-        off = nrm @ c[0]
-        side_src = nrm @ src_center - off
-        side_tgt = nrm @ origin - off
-        if not (side_src * side_tgt > 0):
-            continue  # back-facing or edge-on
+        a, b, c = mesh.inv_depth_planes[q]
+        n_cam = np.array([a * src.fx, b * src.fy, a * src.cx + b * src.cy + c])
+        nrm = rot @ n_cam  # plane: nrm . (X - C_src) = 1
+        off = 1.0 + nrm @ src_center
+        if not (nrm @ origin - off < 0):
+            continue  # target on the back side (or in the plane): back-facing / edge-on
         denom = d @ nrm
         with np.errstate(divide="ignore", invalid="ignore"):
             lam = (off - nrm @ origin) / denom  # = z_t because d has z_t = 1
