@@ -233,6 +233,21 @@ def test_map_pixels_integer_shift_is_exact_copy():
     assert not lay.coverage[:, 0].any()
 
 
+def test_map_pixels_splat_depth_offset():
+    """Seed 003's Dz: moving the eye forward by dz scales the image about the principal point."""
+    view = _plane_view(w=64, h=48, z0=4.0)
+    lay = map_pixels(view, dx=0.0, dz=2.0, method="splat")  # plane now at z = 2: magnified 2x
+    cam = view.camera
+    np.testing.assert_allclose(lay.depth[lay.coverage], 2.0)
+    # source pixel (u, v) lands at cx + 2 (u - cx), cy + 2 (v - cy); with cx = 31.5 source u = 40
+    # lands at 48.5 -> rounds to 49 (half-up), u = 35 at 38.5 -> 39
+    for u, v in ((40, 30), (35, 20)):
+        j = int(np.floor(cam.cx + 2 * (u - cam.cx) + 0.5))
+        k = int(np.floor(cam.cy + 2 * (v - cam.cy) + 0.5))
+        np.testing.assert_array_equal(lay.color[k, j], view.color[v, u])
+    assert 0.6 < 1 - lay.coverage.mean() < 0.8  # a 2x magnified splat leaves 3 of 4 pixels empty
+
+
 def test_scanline_kernel_matches_reference():
     rng = np.random.default_rng(3)
     h, w = 6, 40
