@@ -485,7 +485,62 @@ def _quick_reject(zp, u0, v0, u1, v1, tol):
 
 
 @njit(cache=True)
-def split_edges(zp, ch, rv, tol, first_dir):
+def crease_split(zp, u0, v0, u1, v1, peak):
+    """Where to split a break-free rect whose plane fit failed: ``(direction, line)``.
+
+    Per column (direction 0) and per row (direction 1) the mean |centered second difference|
+    inside the rect is computed. When the most bent line stands out — its mean exceeds ``peak``
+    times the average over the lines of that direction — it is a crease too shallow to be a break
+    edge, and the rect is cut there (ties: the first line). Otherwise (smooth curvature, or a
+    rect too thin for a stencil) the rect is cut in the middle of its longer side.
+    """
+    w = u1 - u0
+    h = v1 - v0
+    best_u = -1.0
+    cu = -1
+    tot_u = 0.0
+    if w >= 3:
+        acc = np.zeros(w, np.float64)
+        for v in range(v0, v1):
+            for c in range(u0 + 1, u1 - 1):
+                acc[c - u0] += abs(zp[v, c - 1] - 2.0 * zp[v, c] + zp[v, c + 1])
+        for c in range(u0 + 1, u1 - 1):
+            m = acc[c - u0] / h
+            tot_u += m
+            if m > best_u:
+                best_u = m
+                cu = c
+        if not best_u > peak * tot_u / (w - 2):
+            cu = -1
+    best_v = -1.0
+    cv = -1
+    tot_v = 0.0
+    if h >= 3:
+        acc = np.zeros(h, np.float64)
+        for r in range(v0 + 1, v1 - 1):
+            s = 0.0
+            for u in range(u0, u1):
+                s += abs(zp[r - 1, u] - 2.0 * zp[r, u] + zp[r + 1, u])
+            acc[r - v0] = s
+        for r in range(v0 + 1, v1 - 1):
+            m = acc[r - v0] / w
+            tot_v += m
+            if m > best_v:
+                best_v = m
+                cv = r
+        if not best_v > peak * tot_v / (h - 2):
+            cv = -1
+    if cu >= 0 and (cv < 0 or best_u >= best_v):
+        return 0, cu
+    if cv >= 0:
+        return 1, cv
+    if w >= h:
+        return 0, u0 + w // 2
+    return 1, v0 + h // 2
+
+
+@njit(cache=True)
+def split_edges(zp, ch, rv, tol, first_dir, peak):
     """Edge-aware, error-bounded binary split.
 
     ``ch``/``rv`` are the break-edge prefix sums of :func:`edge_prefix`. A region with break edges
@@ -493,7 +548,7 @@ def split_edges(zp, ch, rv, tol, first_dir):
     in the alternating direction when that direction holds any break, else in the other one. A
     break-free region is either all invalid (dropped: an invalid/valid pair is always a break) or
     all valid; it is kept when it is one pixel or when the least-squares plane of ``zp`` over it
-    has max |residual| <= ``tol``, else split in the middle of its longer side.
+    has max |residual| <= ``tol``, else split at its most bent line (:func:`crease_split`).
 
     Returns (Q, 4) int32 rects in depth-first order (low child first).
     """
@@ -564,12 +619,7 @@ def split_edges(zp, ch, rv, tol, first_dir):
                 out[n, 3] = v1
                 n += 1
                 continue
-            if u1 - u0 >= v1 - v0:
-                d = 0
-                split = u0 + (u1 - u0) // 2
-            else:
-                d = 1
-                split = v0 + (v1 - v0) // 2
+            d, split = crease_split(zp, u0, v0, u1, v1, peak)
         if d == 0:
             stack[top, 0] = split
             stack[top, 1] = v0

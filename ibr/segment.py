@@ -14,6 +14,8 @@ Methods (``method=``)
                 planar), splits along the grid line holding most break edges, and a rectangle
                 is accepted only when the least-squares plane over it reproduces every pixel's z'
                 within the tolerance — the same plane the mesh uses, so the bound is guaranteed.
+                A break-free rectangle that fails the fit is cut at a distinct crease line if
+                it has one (mean |second difference| > 5x the average line), else in the middle.
 
 Near/far and thresholds
 -----------------------
@@ -67,6 +69,11 @@ METHODS = ("edge", "separate", "paper")
 DEFAULT_METHOD = "edge"
 DEFAULT_MAX_ERROR_PX = 0.5
 DEFAULT_BASELINE_FRACTION = 0.05
+#: ``edge`` method: break edges where a second difference exceeds this fraction of the tolerance.
+DEFAULT_BREAK_FRACTION = 1.0
+#: ``edge`` method: a failed fit is cut at its most bent line when that line's mean |second
+#: difference| exceeds this multiple of the average line (a crease), else in the middle.
+CREASE_PEAK = 5.0
 
 
 # ------------------------------------------------------------------ z'
@@ -266,7 +273,47 @@ def _fit_max_residual_reference(zp, u0, v0, u1, v1):
     return float(np.abs(a @ coef - block.ravel()).max())
 
 
-def _split_edges_reference(zp, invalid, hb, vb, tol, first_dir):
+def _crease_split_reference(zp, u0, v0, u1, v1, peak):
+    """Plain-Python twin of ``_segment_kernels.crease_split`` (same summation order)."""
+    w, h = u1 - u0, v1 - v0
+    cu = cv = -1
+    best_u = best_v = -1.0
+    if w >= 3:
+        means = []
+        for c in range(u0 + 1, u1 - 1):
+            acc = 0.0
+            for v in range(v0, v1):
+                acc += abs(zp[v, c - 1] - 2.0 * zp[v, c] + zp[v, c + 1])
+            means.append(acc / h)
+        tot = 0.0
+        for i, m in enumerate(means):
+            tot += m
+            if m > best_u:
+                best_u, cu = m, u0 + 1 + i
+        if not best_u > peak * tot / (w - 2):
+            cu = -1
+    if h >= 3:
+        means = []
+        for r in range(v0 + 1, v1 - 1):
+            acc = 0.0
+            for u in range(u0, u1):
+                acc += abs(zp[r - 1, u] - 2.0 * zp[r, u] + zp[r + 1, u])
+            means.append(acc / w)
+        tot = 0.0
+        for i, m in enumerate(means):
+            tot += m
+            if m > best_v:
+                best_v, cv = m, v0 + 1 + i
+        if not best_v > peak * tot / (h - 2):
+            cv = -1
+    if cu >= 0 and (cv < 0 or best_u >= best_v):
+        return 0, cu
+    if cv >= 0:
+        return 1, cv
+    return (0, u0 + w // 2) if w >= h else (1, v0 + h // 2)
+
+
+def _split_edges_reference(zp, invalid, hb, vb, tol, first_dir, peak):
     """Plain-Python edge-aware split; same output order as the numba kernel."""
     zp = np.asarray(zp, np.float64)
     invalid = np.asarray(invalid, bool)
@@ -296,10 +343,7 @@ def _split_edges_reference(zp, invalid, hb, vb, tol, first_dir):
             if area == 1 or _fit_max_residual_reference(zp, u0, v0, u1, v1) <= tol:
                 out.append((u0, v0, u1, v1))
                 continue
-            if u1 - u0 >= v1 - v0:
-                d, s = 0, u0 + (u1 - u0) // 2
-            else:
-                d, s = 1, v0 + (v1 - v0) // 2
+            d, s = _crease_split_reference(zp, u0, v0, u1, v1, peak)
         if d == 0:
             stack += [(s, v0, u1, v1, 1), (u0, v0, s, v1, 1)]
         else:
@@ -316,6 +360,7 @@ def split_rects(
     method: str = DEFAULT_METHOD,
     threshold: float,
     tolerance: float | None = None,
+    break_threshold: float | None = None,
     min_band: int = 1,
     reference: bool = False,
 ) -> np.ndarray:
@@ -332,6 +377,9 @@ def split_rects(
         difference (``separate``), or on the second differences that mark break edges (``edge``).
     tolerance : float, optional
         ``edge`` only: max |residual| in z' units of a rect's least-squares plane (default:
+        ``threshold``).
+    break_threshold : float, optional
+        ``edge`` only: second-difference threshold of the break edges in z' units (default:
         ``threshold``).
     min_band : int
         ``paper``/``separate``: the "large enough" scanned band of the seed, in lines (>= 1).
@@ -351,12 +399,15 @@ def split_rects(
         tol = thr if tolerance is None else float(tolerance)
         if not tol >= 0:
             raise ValueError(f"tolerance: expected a number >= 0 (z' units), got {tolerance!r}")
+        bthr = thr if break_threshold is None else float(break_threshold)
+        if not bthr >= 0:
+            raise ValueError(f"break_threshold: expected a number >= 0 (z' units), got {break_threshold!r}")
         if reference:
             invalid = (~np.isfinite(z)).astype(np.uint8)
-            hb, vb = _break_edges_reference(z, thr)
-            return _split_edges_reference(z, invalid, hb, vb, tol, 0)
-        ch, rv = _k.edge_prefix(z, thr)
-        return _k.split_edges(z, ch, rv, tol, 0)
+            hb, vb = _break_edges_reference(z, bthr)
+            return _split_edges_reference(z, invalid, hb, vb, tol, 0, CREASE_PEAK)
+        ch, rv = _k.edge_prefix(z, bthr)
+        return _k.split_edges(z, ch, rv, tol, 0, CREASE_PEAK)
     invalid = (~np.isfinite(z)).astype(np.uint8)
     if reference:
         m = _laplacian_measure_reference(z) if method == "paper" else _separate_measure_reference(z)
@@ -412,6 +463,7 @@ def segment(
     near: float | None = None,
     far: float | None = None,
     min_band: int = 1,
+    break_fraction: float = DEFAULT_BREAK_FRACTION,
 ) -> Segmentation:
     """Segment a planar depth map into rectangles that are planar in 1/z.
 
@@ -470,7 +522,11 @@ def segment(
         thr = tol_q * scale
     else:
         thr = check_positive("threshold", threshold)
-    rects = split_rects(zp, method=method, threshold=thr, min_band=min_band)
+    if method == "edge":
+        bf = check_positive("break_fraction", break_fraction)
+        rects = split_rects(zp, method=method, threshold=thr, break_threshold=bf * thr)
+    else:
+        rects = split_rects(zp, method=method, threshold=thr, min_band=min_band)
     seconds = time.perf_counter() - t0
     tol = thr if method == "edge" else None
     return Segmentation(

@@ -246,3 +246,29 @@ def test_tolerance_from_error_px_worked_example():
     p2 = cam.unproject(np.array([10.0, 20.0]), z2)
     shift = abs(moved.project(p1)[0][0] - moved.project(p2)[0][0])
     assert shift == pytest.approx(cam.fx * b * abs(1 / z1 - 1 / z2), rel=1e-9)
+
+
+def test_shallow_crease_is_cut_where_it_lies():
+    """A crease too shallow to be a break edge: the failed fit is cut at the crease, not the middle."""
+    u = np.arange(31, dtype=float)
+    zp = (1000.0 * np.abs(u - 10))[None, :].repeat(3, 0)  # crease at column 10
+    rects = S.split_rects(zp, method="edge", threshold=1e9, tolerance=1.0)  # no breaks at all
+    assert rects.tolist() == [[0, 0, 10, 3], [10, 0, 31, 3]]
+    assert S.split_rects(zp, method="edge", threshold=1e9, tolerance=1.0, reference=True).tolist() == rects.tolist()
+    # smooth curvature has no distinct line: cut in the middle of the longer side
+    zp2 = (np.arange(31.0) ** 2)[None, :].repeat(3, 0)
+    assert K.crease_split(zp2, 0, 0, 31, 3, S.CREASE_PEAK) == (0, 15)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_edge_split_fit_path_matches_reference(seed):
+    """Break edges off (huge break threshold): every cut comes from failed fits."""
+    zp, _, _ = S.zprime(piecewise_scene(seed))
+    zp = np.where(np.isfinite(zp), zp, 0.0)  # all valid, so that no break is forced
+    for tol in (2.0**12, 2.0**16):
+        got = S.split_rects(zp, method="edge", threshold=1e12, tolerance=tol)
+        ref = S.split_rects(zp, method="edge", threshold=1e12, tolerance=tol, reference=True)
+        assert got.tolist() == ref.tolist()
+        for u0, v0, u1, v1 in got:
+            if (u1 - u0) * (v1 - v0) > 1:
+                assert S._fit_max_residual_reference(zp, u0, v0, u1, v1) <= tol * (1 + 1e-12)
