@@ -148,8 +148,13 @@ def direction_from_equirect_pixel(u, v, width: int, height: int) -> np.ndarray:
 @lru_cache(maxsize=8)
 def equirect_directions(width: int, height: int) -> np.ndarray:
     """(H, W, 3) float64 unit directions of every equirect pixel center; cached, read-only."""
-    v, u = np.mgrid[0:height, 0:width]
-    d = direction_from_equirect_pixel(u, v, width, height)
+    lon = ((np.arange(width) + 0.5) / width - 0.5) * 2 * np.pi
+    lat = (0.5 - (np.arange(height) + 0.5) / height) * np.pi
+    c = np.cos(lat)[:, None]
+    d = np.empty((height, width, 3))
+    d[..., 0] = c * np.sin(lon)  # separable form of direction_from_lonlat
+    d[..., 1] = -np.sin(lat)[:, None]
+    d[..., 2] = c * np.cos(lon)
     d.setflags(write=False)
     return d
 
@@ -164,9 +169,8 @@ def face_directions(face_size: int, normalize: bool = False) -> np.ndarray:
     """
     s = int(face_size)
     c = 2 * (np.arange(s, dtype=np.float64) + 0.5) / s - 1  # a or b of pixel centers
-    b, a = np.meshgrid(c, c, indexing="ij")
-    ab1 = np.stack([a, b, np.ones_like(a)], axis=-1)  # (S, S, 3) face-camera rays, z = 1
-    d = np.einsum("fij,hwj->fhwi", WORLD_FROM_FACE, ab1)
+    right, down, fwd = (WORLD_FROM_FACE[:, None, None, :, k] for k in range(3))  # (6, 1, 1, 3)
+    d = right * c[None, None, :, None] + down * c[None, :, None, None] + fwd
     if normalize:
         d = d / np.linalg.norm(d, axis=-1, keepdims=True)
     d.setflags(write=False)
@@ -180,13 +184,16 @@ def face_pixel_from_direction(d, face_size: int) -> tuple[np.ndarray, np.ndarray
     the lower index). u, v are in [-0.5, S - 0.5] with centers at integers (see module doc).
     """
     d = np.asarray(d, dtype=np.float64)
-    # d expressed in each face frame: face_from_world = WORLD_FROM_FACE[f].T
-    fwd = np.einsum("fi,...i->...f", WORLD_FROM_FACE[:, :, 2], d)
-    face = np.argmax(fwd, axis=-1)
-    rot = WORLD_FROM_FACE[face]  # (..., 3, 3)
-    local = np.einsum("...ij,...i->...j", rot, d)  # = rot.T @ d
-    a = local[..., 0] / local[..., 2]
-    b = local[..., 1] / local[..., 2]
+    # The face's forward axis is +-e_k for the dominant axis k: FACE_NAMES order is 2k (+) and
+    # 2k + 1 (-); ties go to the lower axis (argmax), i.e. the lower face index.
+    axis = np.argmax(np.abs(d), axis=-1)
+    comp = np.take_along_axis(d, axis[..., None], axis=-1)[..., 0]
+    face = 2 * axis + (comp < 0)
+    # local coordinates: a = d . right_f / d . forward_f, b = d . down_f / d . forward_f
+    right, down = WORLD_FROM_FACE[face, :, 0], WORLD_FROM_FACE[face, :, 1]
+    inv = 1.0 / np.abs(comp)
+    a = np.einsum("...i,...i->...", d, right) * inv
+    b = np.einsum("...i,...i->...", d, down) * inv
     s = float(face_size)
     return face, (a + 1) * 0.5 * s - 0.5, (b + 1) * 0.5 * s - 0.5
 
