@@ -146,3 +146,23 @@ def test_web_viewer_matches_library_render(tmp_path):
         server.shutdown()
         server.server_close()
         shutil.rmtree(profile, ignore_errors=True)
+
+
+def test_viewer_site_is_served_on_loopback_only(tmp_path):
+    import urllib.request
+    from panorama.viewer import serve, site_url, write_site
+    write_site(tmp_path, np.full((32, 64, 3), 0.5, np.float32), face_size=8)
+    server = serve(tmp_path)
+    try:
+        assert server.server_address[0] == "127.0.0.1"
+        url = site_url(server, yaw_deg=10, pitch_deg=-5, fov_deg=70)
+        assert url.startswith("http://127.0.0.1:") and "yaw=10&pitch=-5" in url
+        page = urllib.request.urlopen(url, timeout=10).read().decode()
+        assert "TEXTURE_CUBE_MAP_POSITIVE_X" in page
+        face = urllib.request.urlopen(url.split("index.html")[0] + "ny.png", timeout=10).read()
+        assert face[:8] == b"\x89PNG\r\n\x1a\n"
+    finally:
+        server.shutdown()
+        server.server_close()
+    with pytest.raises(FileNotFoundError, match="has no index.html"):
+        serve(tmp_path / "nowhere")

@@ -308,3 +308,25 @@ def test_errors_are_clear(eq):
         P.equirect_to_cubemap(np.zeros((8, 16), np.uint8), 4, depth=True)
     with pytest.raises(ValueError, match="face -x has shape"):
         P.cubemap_to_equirect([np.zeros((8, 8))] + [np.zeros((4, 4))] * 5, 64, 32, layout="list")
+
+
+def test_direction_pixel_round_trips_hypothesis():
+    hyp = pytest.importorskip("hypothesis")
+    st = pytest.importorskip("hypothesis.strategies")
+
+    @hyp.settings(max_examples=200, deadline=None)
+    @hyp.given(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1), st.integers(1, 300))
+    def check(x, y, z, s):
+        d = np.array([x, y, z])
+        hyp.assume(np.linalg.norm(d) > 1e-3)
+        face, u, v = face_pixel_from_direction(d, s)
+        assert -0.5 - 1e-9 <= u <= s - 0.5 + 1e-9 and -0.5 - 1e-9 <= v <= s - 0.5 + 1e-9
+        a, b = 2 * (u + 0.5) / s - 1, 2 * (v + 0.5) / s - 1
+        back = WORLD_FROM_FACE[face] @ [a, b, 1]
+        np.testing.assert_allclose(back / np.linalg.norm(back), d / np.linalg.norm(d), atol=1e-9)
+        w = 2 * s
+        eu, ev = equirect_pixel_from_direction(d, w, s)
+        np.testing.assert_allclose(direction_from_equirect_pixel(eu, ev, w, s), d / np.linalg.norm(d),
+                                   atol=1e-9)
+
+    check()
