@@ -33,6 +33,7 @@ moves to f^-1(rho). ``inverse=True`` undoes it (samples at f^-1(r)), i.e. simula
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Sequence
 
 import cv2
@@ -204,6 +205,26 @@ def _lenses(lens) -> tuple[RadialDistortion, ...]:
 def distortion_maps(width: int, height: int, lens: RadialDistortion, *, center_px=None,
                     scale_px: float | None = None, inverse: bool = False,
                     method: str = "newton") -> tuple[np.ndarray, np.ndarray]:
+    """Cached, read-only sampling maps; see :func:`_distortion_maps` (same arguments)."""
+    if not isinstance(lens, RadialDistortion):
+        raise TypeError(f"lens: expected a RadialDistortion, got {type(lens).__name__}")
+    center = None if center_px is None else (float(center_px[0]), float(center_px[1]))
+    scale = None if scale_px is None else float(scale_px)
+    return _cached_maps(int(width), int(height), lens, center, scale, bool(inverse), method)
+
+
+@lru_cache(maxsize=16)
+def _cached_maps(width, height, lens, center, scale, inverse, method):
+    mx, my = _distortion_maps(width, height, lens, center_px=center, scale_px=scale,
+                              inverse=inverse, method=method)
+    mx.setflags(write=False)
+    my.setflags(write=False)
+    return mx, my
+
+
+def _distortion_maps(width: int, height: int, lens: RadialDistortion, *, center_px=None,
+                     scale_px: float | None = None, inverse: bool = False,
+                     method: str = "newton") -> tuple[np.ndarray, np.ndarray]:
     """Sampling maps ``(map_x, map_y)`` (H, W) float32 for ``cv2.remap``.
 
     Output pixel (u, v) at normalized radius r from ``center_px`` samples the input at radius

@@ -114,14 +114,29 @@ def rotation_maps(src: Camera, dst: Camera, *, ignore_translation: bool = False)
 def warp_rotation(color, src: Camera, dst: Camera, *, ignore_translation: bool = False) -> TimewarpFrame:
     """Re-project a frame rendered with ``src`` to the rotated camera ``dst`` (exact homography).
 
-    Bilinear ``cv2.remap``; where the source (the guard band) runs out, the nearest edge pixel is
-    replicated (``BORDER_REPLICATE``) and flagged in ``outside``. Keeps the dtype.
+    Bilinear ``cv2.warpPerspective`` (``cv2.remap`` of explicit maps when part of the new view
+    looks behind the old camera); where the source (the guard band) runs out, the nearest edge
+    pixel is replicated (``BORDER_REPLICATE``) and flagged in ``outside``. Keeps the dtype.
     """
     img = check_image("color", color)
     if img.shape[:2] != src.shape:
         raise ValueError(f"color: size {img.shape[1]}x{img.shape[0]} does not match src {src.width}x{src.height}")
-    mu, mv, outside = rotation_maps(src, dst, ignore_translation=ignore_translation)
-    out = cv2.remap(img, mu, mv, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    h_sd = np.linalg.inv(rotation_homography(src, dst, ignore_translation=ignore_translation))
+    corners = np.array([[-0.5, -0.5, 1], [dst.width - 0.5, -0.5, 1], [-0.5, dst.height - 0.5, 1],
+                        [dst.width - 0.5, dst.height - 0.5, 1]]) @ h_sd.T
+    size = (dst.width, dst.height)
+    if np.all(corners[:, 2] > 0):  # w is affine in (u, v): positive at the corners -> everywhere
+        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+        out = cv2.warpPerspective(img, h_sd, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+        inside = cv2.warpPerspective(np.ones(src.shape, np.uint8), h_sd, size,
+                                     flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP,
+                                     borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        outside = inside == 0
+    else:  # part of the new view looks behind the old camera: explicit maps flag it
+        mu, mv, outside = rotation_maps(src, dst, ignore_translation=ignore_translation)
+        out = cv2.remap(img, mu, mv, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    if out.ndim == 2 and img.ndim == 3:
+        out = out[..., None]
     return TimewarpFrame(out, outside, np.zeros(dst.shape, bool), dst)
 
 

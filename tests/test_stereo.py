@@ -429,6 +429,9 @@ def test_dubois_anaglyph():
     ref = np.clip(_lin(l) @ DUBOIS_RED_CYAN_LEFT.T + _lin(r) @ DUBOIS_RED_CYAN_RIGHT.T, 0, 1)
     got = _lin(dubois_anaglyph(l, r))
     assert np.max(np.abs(got - ref)) < 0.01  # 8-bit rounding in sRGB
+    # the integer table path agrees with the exact float path to one code value
+    exact = dubois_anaglyph(l.astype(np.float32) / 255, r.astype(np.float32) / 255)
+    assert np.max(np.abs(dubois_anaglyph(l, r).astype(float) - exact * 255)) <= 1.0
 
 
 def _lin(u8):
