@@ -31,7 +31,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ._synth_prims import Box, Primitive, Rect, Sphere, rotation
+from ._synth_prims import Box, Primitive, Rect, Sphere, mat3, rotation
 from ._synth_scenes import SCENES, build_scene, camera_poses, make_staircase
 from ._synth_texture import TEXTURE_NAMES, ImageTexture, checker_texture, image_texture
 from ._validate import check_array
@@ -176,8 +176,7 @@ class Scene:
         color[:] = np.asarray(self.background, np.float32)
         for s in range(0, n, _CHUNK):
             sl = slice(s, min(n, s + _CHUNK))
-            self._trace_chunk(o[sl] if o.ndim == 2 else np.broadcast_to(o, d[sl].shape), d[sl],
-                              t[sl], prim[sl], normal[sl], color[sl], shade)
+            self._trace_chunk(o[sl] if o.ndim == 2 else o, d[sl], t[sl], prim[sl], normal[sl], color[sl], shade)
         return Hit(t, normal, color, prim)
 
     def _trace_chunk(self, o, d, t, prim, normal, color, shade):
@@ -191,7 +190,7 @@ class Scene:
             if i < 0:
                 continue
             sel = np.nonzero(prim == i)[0]
-            pts = o[sel] + t[sel, None] * d[sel]
+            pts = (o[sel] if o.ndim == 2 else o) + t[sel, None] * d[sel]
             nrm, albedo = self.primitives[i].surface(pts)
             nrm = np.array(nrm, dtype=np.float64)
             flip = np.einsum("ij,ij->i", nrm, d[sel]) > 0  # two-sided: face the incoming ray
@@ -267,7 +266,7 @@ def _camera_dirs(camera: Camera, du: float = 0.0, dv: float = 0.0) -> np.ndarray
     """Unit world directions (H*W, 3) through pixel centers shifted by (du, dv) pixels."""
     u, v = camera.pixel_grid()
     rays = np.stack([(u + du - camera.cx) / camera.fx, (v + dv - camera.cy) / camera.fy, np.ones_like(u)], -1)
-    d = rays.reshape(-1, 3) @ camera.world_from_cam[:3, :3].T
+    d = mat3(rays.reshape(-1, 3), camera.world_from_cam[:3, :3].T)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     return d
 
