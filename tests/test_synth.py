@@ -116,6 +116,35 @@ def test_staircase_step_heights():
     assert np.max(np.abs(hit.t - expected)) <= 1e-14
 
 
+@pytest.mark.parametrize("name", ["room", "clutter"])
+def test_random_rays_land_on_the_reported_surface(name):
+    # 3000 seeded random rays from random points inside the room: every hit point satisfies its
+    # primitive's surface equation to ~1e-12 and its normal is a unit vector facing the ray.
+    scene = make_scene(name)
+    rng = np.random.default_rng(7)
+    o = rng.uniform([-1.0, -0.8, -0.5], [1.0, 0.5, 1.0], (3000, 3))
+    d = rng.normal(size=(3000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    hit = scene.trace(o, d)
+    assert np.all(hit.valid)  # closed rooms
+    p = o + hit.t[:, None] * d
+    assert np.all(np.abs(np.linalg.norm(hit.normal, axis=1) - 1) < 1e-12)
+    assert np.all(np.einsum("ij,ij->i", hit.normal, d) <= 0)
+    for i in np.unique(hit.prim):
+        prim, q = scene.primitives[i], p[hit.prim == i]
+        if isinstance(prim, Sphere):
+            res = np.abs(np.linalg.norm(q - prim.center, axis=1) - prim.radius)
+        elif isinstance(prim, Box):
+            lp = (q - prim.center) @ prim.world_from_box
+            res = np.abs(np.max(np.abs(lp) / prim.half_size, axis=1) - 1) * prim.half_size.min()
+        else:
+            rel = q - prim.center
+            res = np.abs(rel @ prim.normal)
+            assert np.all(np.abs(rel @ prim.axis_u) <= prim.half_u + 1e-9)
+            assert np.all(np.abs(rel @ prim.axis_v) <= prim.half_v + 1e-9)
+        assert res.max() < 1e-12 * 10, (type(prim).__name__, res.max())
+
+
 def test_planar_depth_is_range_times_cosine_off_axis():
     scene = make_scene("room")
     pose = look_at((0.3, -0.2, 0.5), (2.0, 1.0, 5.0))  # oblique view, off-axis pixels everywhere
