@@ -242,6 +242,24 @@ def test_default_cameras_see_no_miss(name):
         assert view.color.dtype == np.float32 and 0 <= view.color.min() and view.color.max() <= 1
 
 
+@pytest.mark.parametrize("name", ["room", "clutter"])
+def test_depth_of_one_view_reprojects_into_the_other(name):
+    # Lift view b's depth to world points, cast rays from camera a toward them: the ray's range
+    # equals the distance unless something nearer occludes the point (a disocclusion in a).
+    cam_a, cam_b = scene_cameras(name, width=96, height=72)
+    scene = make_scene(name)
+    vb = render(scene, cam_b)
+    u, v = cam_b.pixel_grid()
+    pts = cam_b.unproject(np.stack([u, v], -1), vb.depth.astype(np.float64)).reshape(-1, 3)
+    to = pts - cam_a.position
+    dist = np.linalg.norm(to, axis=1)
+    _, rng = render_rays(scene, cam_a.position, to / dist[:, None])
+    rel = (rng - dist) / dist  # float32 depth of b limits agreement to ~1e-7
+    visible = np.abs(rel) < 1e-6
+    assert visible.mean() > 0.9
+    assert np.all(rel[~visible] < -1e-3)  # the rest is occluded in a, never "behind" the surface
+
+
 def test_scene_camera_pairs_are_view_interpolation_pairs():
     for name in ("room", "clutter", "grazing"):
         a, b = scene_cameras(name)
