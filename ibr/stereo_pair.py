@@ -354,8 +354,12 @@ def _dubois_lut(l_img: np.ndarray, r_img: np.ndarray) -> np.ndarray:
     """Integer fast path of :func:`dubois_anaglyph`: table decode, float32 matrices
     (``cv2.transform``), 16-bit linear quantization, table encode (< 0.1 code value error)."""
     decode, encode = _srgb_tables(l_img.dtype.name)
-    lf = decode[l_img]
-    rf = decode[r_img]
+    if l_img.dtype == np.uint8:  # cv2.LUT: 256-entry table, float32 output
+        lf = cv2.LUT(np.ascontiguousarray(l_img), decode)
+        rf = cv2.LUT(np.ascontiguousarray(r_img), decode)
+    else:
+        lf = decode[l_img]
+        rf = decode[r_img]
     lin = cv2.transform(lf, DUBOIS_RED_CYAN_LEFT.astype(np.float32))
     lin += cv2.transform(rf, DUBOIS_RED_CYAN_RIGHT.astype(np.float32))
     idx = np.clip(lin * 65535.0 + 0.5, 0, 65535).astype(np.uint16)
