@@ -27,7 +27,7 @@ from ._validate import check_choice, check_finite_scalar, check_positive
 from .camera import Camera, interpolate_cameras
 from .composite import COMPOSITE_MODES, composite, viewpoint_weights
 from .fill import FILLS, fill_background, fill_previous
-from .render import FOOTPRINTS, Layer, as_float_color, rasterize_mesh, sample_maps
+from .render import FOOTPRINTS, INTERPOLATIONS, Layer, as_float_color, rasterize_mesh, sample_maps
 from .view import View
 
 __all__ = [
@@ -135,7 +135,8 @@ def _check_source(view, name: str) -> None:
         )
 
 
-def _layer(view: View, camera: Camera, method: str, footprint: str, splat: str, mesh_options: dict) -> Layer:
+def _layer(view: View, camera: Camera, method: str, footprint: str, splat: str, mesh_options: dict,
+           interpolation: str = "linear") -> Layer:
     src = _source(view)
     if method == "mesh":
         maps = rasterize_mesh(source_mesh(view, **mesh_options), camera, footprint=footprint)
@@ -143,7 +144,7 @@ def _layer(view: View, camera: Camera, method: str, footprint: str, splat: str, 
         from .forward import forward_maps
 
         maps = forward_maps(view.depth, view.camera, camera, splat=splat)
-    return Layer(sample_maps(src.color, maps.map_u, maps.map_v), maps.depth, maps.coverage)
+    return Layer(sample_maps(src.color, maps.map_u, maps.map_v, interpolation=interpolation), maps.depth, maps.coverage)
 
 
 def _finish(comp, camera, t, fill, previous, out_2d) -> Rendering:
@@ -183,7 +184,8 @@ def warp(
     *,
     method: str = "mesh",
     fill: str = "inpaint",
-    footprint: str = "surface",
+    footprint: str = "free",
+    interpolation: str = "linear",
     splat: str = "inverse",
     mesh_options: dict | None = None,
 ) -> Rendering:
@@ -201,8 +203,10 @@ def warp(
     fill : {"inpaint", "none", "previous"}
         Hole filling: depth-aware background fill (default) or none. ``"previous"`` has no
         previous frame here and behaves like ``"inpaint"``.
-    footprint : {"surface", "quad", "free"}
+    footprint : {"free", "surface", "quad"}
         Sample-footprint clamping of the mesh renderer (:func:`ibr.render.rasterize_mesh`).
+    interpolation : {"linear", "cubic"}
+        Color reconstruction filter (bicubic: sharper, about 5x the sampling time).
     splat : {"inverse", "nearest"}
         Splat mode of ``method="forward"`` (:func:`ibr.forward.forward_warp`).
     mesh_options : dict, optional
@@ -221,9 +225,10 @@ def warp(
     check_choice("method", method, METHODS)
     check_choice("fill", fill, FILLS)
     check_choice("footprint", footprint, FOOTPRINTS)
+    check_choice("interpolation", interpolation, INTERPOLATIONS)
     _check_source(view, "view")
     camera = _check_target(camera)
-    layer = _layer(view, camera, method, footprint, splat, dict(mesh_options or {}))
+    layer = _layer(view, camera, method, footprint, splat, dict(mesh_options or {}), interpolation)
     if not layer.coverage.any():
         raise _nothing_seen(camera, [view.name], None)
     comp = composite([layer], [1.0], dtype=view.color.dtype)
@@ -258,7 +263,8 @@ def iter_interpolate(
     composite_mode: str = "blend",
     fill: str = "previous",
     depth_tol: float = 0.02,
-    footprint: str = "surface",
+    footprint: str = "free",
+    interpolation: str = "linear",
     splat: str = "inverse",
     mesh_options: dict | None = None,
 ) -> Iterator[Rendering]:
@@ -268,6 +274,7 @@ def iter_interpolate(
     check_choice("composite_mode", composite_mode, COMPOSITE_MODES)
     check_choice("fill", fill, FILLS)
     check_choice("footprint", footprint, FOOTPRINTS)
+    check_choice("interpolation", interpolation, INTERPOLATIONS)
     depth_tol = check_positive("depth_tol", depth_tol)
     _check_source(view_a, "view_a")
     _check_source(view_b, "view_b")
@@ -285,8 +292,8 @@ def iter_interpolate(
     opts = dict(mesh_options or {})
     previous = None
     for cam, tv in zip(cams, ts):
-        la = _layer(view_a, cam, method, footprint, splat, opts)
-        lb = _layer(view_b, cam, method, footprint, splat, opts)
+        la = _layer(view_a, cam, method, footprint, splat, opts, interpolation)
+        lb = _layer(view_b, cam, method, footprint, splat, opts, interpolation)
         if not (la.coverage.any() or lb.coverage.any()):
             raise _nothing_seen(cam, [view_a.name, view_b.name], tv)
         w = viewpoint_weights(cam, [view_a.camera, view_b.camera])
@@ -304,7 +311,8 @@ def interpolate(
     composite_mode: str = "blend",
     fill: str = "previous",
     depth_tol: float = 0.02,
-    footprint: str = "surface",
+    footprint: str = "free",
+    interpolation: str = "linear",
     splat: str = "inverse",
     mesh_options: dict | None = None,
 ) -> "Rendering | list[Rendering]":
@@ -330,7 +338,7 @@ def interpolate(
         every frame, or nothing.
     depth_tol : float
         Relative depth tolerance under which both layers see the same surface.
-    footprint, splat, mesh_options
+    footprint, interpolation, splat, mesh_options
         See :func:`warp`. Meshes are built once per source view and reused for every frame
         (and by later calls with the same view objects).
 
@@ -354,7 +362,7 @@ def interpolate(
     frames = list(
         iter_interpolate(
             view_a, view_b, t, method=method, composite_mode=composite_mode, fill=fill, depth_tol=depth_tol,
-            footprint=footprint, splat=splat, mesh_options=mesh_options,
+            footprint=footprint, interpolation=interpolation, splat=splat, mesh_options=mesh_options,
         )
     )
     single = isinstance(t, (Camera, View)) or np.ndim(t) == 0

@@ -88,7 +88,7 @@ def test_kernel_matches_reference_on_random_meshes(seed):
     for k in range(4):
         tgt = Camera(rng.uniform(30, 80), rng.uniform(30, 80), rng.uniform(20, 40), rng.uniform(15, 30),
                      56, 40, random_pose(rng, scale=0.8 if k else 2.5))
-        got = rasterize_mesh(mesh, tgt, footprint="free")
+        got = rasterize_mesh(mesh, tgt, footprint="none")
         ref = rasterize_mesh_reference(mesh, tgt)
         np.testing.assert_array_equal(got.coverage, ref.coverage)
         c = got.coverage
@@ -113,7 +113,7 @@ def test_plane_maps_and_depth_are_exact(normal_w, move):
     point = np.array([0.0, 0.4, 3.0])
     tgt = SRC.with_pose(look_at(np.asarray(move), point + (0, 0, 1.0)))
     mesh = mesh_from_rects(SRC, [[0, 0, SRC.width, SRC.height]], [plane_coeffs(SRC, point, normal_w)])
-    got = rasterize_mesh(mesh, tgt, footprint="free")
+    got = rasterize_mesh(mesh, tgt, footprint="none")
     uv, lam, zs = analytic_maps(SRC, tgt, point, normal_w)
     inside = (lam > 0) & (zs > 0) & (uv[..., 0] >= -0.5) & (uv[..., 0] < SRC.width - 0.5) \
         & (uv[..., 1] >= -0.5) & (uv[..., 1] < SRC.height - 0.5)
@@ -189,14 +189,14 @@ def test_adjacent_coplanar_quads_neither_crack_nor_double_cover(seed):
     tiles = mesh_from_rects(SRC, rects, [plane] * len(rects))
     whole = mesh_from_rects(SRC, [[0, 0, SRC.width, SRC.height]], [plane])
     tgt = Camera.from_fov(80, 60, hfov_deg=75, world_from_cam=random_pose(rng, 0.3, 0.15))
-    ref = rasterize_mesh(whole, tgt, footprint="free")
-    got = rasterize_mesh(tiles, tgt, footprint="free")
+    ref = rasterize_mesh(whole, tgt, footprint="none")
+    got = rasterize_mesh(tiles, tgt, footprint="none")
     np.testing.assert_array_equal(got.coverage, ref.coverage)  # no crack
     assert ref.coverage.mean() > 0.3
     # no double cover: each quad rendered alone; the coverage counts must be exactly 0/1
     count = np.zeros(tgt.shape, int)
     for r in rects:
-        count += rasterize_mesh(mesh_from_rects(SRC, [r], [plane]), tgt, footprint="free").coverage
+        count += rasterize_mesh(mesh_from_rects(SRC, [r], [plane]), tgt, footprint="none").coverage
     np.testing.assert_array_equal(count, ref.coverage.astype(int))
 
 
@@ -205,7 +205,7 @@ def test_shared_edge_belongs_to_one_quad_under_identity():
     the right one: the half-open rule in source space."""
     cam = Camera.from_fov(20, 4, hfov_deg=60)
     mesh = mesh_from_rects(cam, [[0, 0, 10, 4], [10, 0, 20, 4]], [[0, 0, 0.5], [0, 0, 0.25]])
-    maps = rasterize_mesh(mesh, cam, footprint="free")
+    maps = rasterize_mesh(mesh, cam, footprint="none")
     np.testing.assert_array_equal(maps.depth[:, :10], 2.0)
     np.testing.assert_array_equal(maps.depth[:, 10:], 4.0)
 
@@ -217,7 +217,7 @@ def test_occlusion_keeps_the_nearer_quad_in_any_order():
     rects = [[0, 0, 40, 30], near]  # a far wall quad overlapped in the target by a near quad
     planes = [[0, 0, 1 / 6.0], [0, 0, 1 / 2.0]]
     tgt = cam.translated(np.array([0.3, 0.0, 0.0]))
-    maps = [rasterize_mesh(mesh_from_rects(cam, r, p), tgt, footprint="free")
+    maps = [rasterize_mesh(mesh_from_rects(cam, r, p), tgt, footprint="none")
             for r, p in ((rects, planes), (rects[::-1], planes[::-1]))]
     np.testing.assert_array_equal(maps[0].depth, maps[1].depth)
     d = maps[0].depth
@@ -235,7 +235,7 @@ def test_quad_crossing_the_camera_plane_is_clipped_not_smeared():
     mesh = mesh_from_rects(cam, [[0, 30, 64, 48]], [plane_coeffs(cam, point, normal)])
     # target: moved forward past the near part of the floor, looking down and back
     tgt = cam.with_pose(look_at((0.0, 0.2, 3.0), (0.0, 1.0, 1.5)))
-    got = rasterize_mesh(mesh, tgt, footprint="free")
+    got = rasterize_mesh(mesh, tgt, footprint="none")
     ref = rasterize_mesh_reference(mesh, tgt)
     np.testing.assert_array_equal(got.coverage, ref.coverage)
     assert got.coverage.any()
@@ -266,7 +266,7 @@ def test_plane_through_the_source_camera_plane_inside_a_rect():
     planes = [[a, 0, -a * -0.2]]  # 1/z = a (u + 0.2): 0 at u = -0.2, inside [-0.5, 31.5)
     mesh = mesh_from_rects(cam, [[0, 0, 32, 24]], planes)
     tgt = cam.translated(np.array([0.1, 0.05, -0.2]))
-    got = rasterize_mesh(mesh, tgt, footprint="free")
+    got = rasterize_mesh(mesh, tgt, footprint="none")
     ref = rasterize_mesh_reference(mesh, tgt)
     np.testing.assert_array_equal(got.coverage, ref.coverage)
     assert got.coverage.mean() > 0.5
@@ -274,8 +274,8 @@ def test_plane_through_the_source_camera_plane_inside_a_rect():
 
 # ----------------------------------------------------------------------------- sampling
 def test_surface_footprint_stops_color_bleeding_across_depth_edges():
-    """Red near square over a blue far wall: with the default footprint no covered wall pixel
-    picks up red; the unclamped footprint does (so the test can fail)."""
+    """Red near square over a blue far wall: with footprint="surface" no covered wall pixel picks
+    up red; the unclamped footprint does (so the test can fail)."""
     cam = Camera.from_fov(48, 32, hfov_deg=60)
     color = np.zeros((32, 48, 3), np.float32)
     color[..., 2] = 1.0
@@ -287,13 +287,24 @@ def test_surface_footprint_stops_color_bleeding_across_depth_edges():
     mesh = mesh_from_rects(cam, rects, planes)
     tgt = cam.translated(np.array([0.23, 0.11, 0.0]))
     wall = lambda layer: layer.coverage & (layer.depth > 5)  # noqa: E731
-    clamped = render_mesh(mesh, color, tgt)
+    clamped = render_mesh(mesh, color, tgt, footprint="surface")
     free = render_mesh(mesh, color, tgt, footprint="free")
     assert clamped.color[wall(clamped)][:, 0].max() == 0.0
     assert free.color[wall(free)][:, 0].max() > 0.2
     # and the near square stays pure red inside (its own quad is clamped too)
     sq = clamped.coverage & (clamped.depth < 3)
     assert sq.sum() > 100 and clamped.color[sq][:, 2].max() == 0.0
+
+
+def test_free_footprint_does_not_darken_the_image_border():
+    """Sampling half a pixel outside the source (u in [-0.5, 0)) must not read remap's black
+    border: a constant image stays constant up to the edge."""
+    cam = Camera.from_fov(32, 24, hfov_deg=60)
+    mesh = mesh_from_rects(cam, [[0, 0, 32, 24]], [[0, 0, 0.5]])
+    tgt = Camera(cam.fx, cam.fy, cam.cx + 0.4, cam.cy - 0.3, 32, 24)  # samples at u - 0.4, v + 0.3
+    layer = render_mesh(mesh, np.full((24, 32, 3), 7.0, np.float32), tgt)
+    assert layer.coverage[:, 0].all() and layer.coverage[-1].all()
+    np.testing.assert_array_equal(layer.color[layer.coverage], 7.0)
 
 
 def test_layer_shapes_and_dtypes():

@@ -1,0 +1,235 @@
+"""``ibr interpolate``: intermediate views between two RGB-D views (seed 002).
+
+Without view files it runs on the bundled sample pair (``samples/data``, the clutter scene) at
+the ground-truth positions t = 0.25, 0.5, 0.75 and prints PSNR/SSIM against the bundled
+ground-truth views. Frames go to ``--out`` (default ``./out``) as ``frame_000_t0.250.png`` ...
+"""
+
+from __future__ import annotations
+
+HELP = "render intermediate views between two RGB-D views (no arguments: the bundled sample pair)"
+
+SAMPLE_SCENE = "clutter"
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("views", nargs="*", metavar="VIEW.json",
+                        help="two view files A and B (default: the bundled sample pair)")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--frames", type=int, metavar="N",
+                       help="N frames evenly spaced from A to B, both included (t = i / (N - 1))")
+    where.add_argument("--t", type=float, nargs="+", metavar="T",
+                       help="interpolation parameters (0 = A, 1 = B; default 0.25 0.5 0.75)")
+    parser.add_argument("--scene", default=None, metavar="NAME",
+                        help=f"bundled sample scene when no view files are given (default {SAMPLE_SCENE})")
+    parser.add_argument("--out", default="out", metavar="DIR", help="output folder (default: %(default)s)")
+    parser.add_argument("--fill", choices=("previous", "inpaint", "none"), default="previous",
+                        help="hole filling: previous frame (seed step 7, default), depth-aware "
+                             "background fill, or none")
+    parser.add_argument("--method", choices=("mesh", "forward"), default="mesh",
+                        help="quad-mesh inverse warp (default) or per-pixel forward splat (preview)")
+    parser.add_argument("--composite", choices=("blend", "front"), default="blend",
+                        help="depth-aware blend (default) or the seed's nearer-source-in-front order")
+    parser.add_argument("--format", choices=("png", "exr"), default="png",
+                        help="frame format: png (the sources' 8/16-bit) or exr (float32)")
+    parser.add_argument("--video", metavar="OUT.mp4", help="also write the frames as a video (OpenCV writer)")
+    parser.add_argument("--fps", type=float, default=24.0, help="video frame rate (default %(default)s)")
+    parser.add_argument("--contact-sheet", metavar="SHEET.png", help="also write a contact sheet of all frames")
+    parser.add_argument("--holes", action="store_true",
+                        help="also write each frame's hole mask (holes before filling) as a PNG")
+
+
+def _sample_pair(scene):
+    """(A, B, {t: ground-truth path}) of a bundled scene from samples/data/manifest.json."""
+    import json
+
+    from samples import DATA_DIR
+
+    manifest_path = DATA_DIR / "manifest.json"
+    if not manifest_path.is_file():
+        raise FileNotFoundError(f"bundled samples: {manifest_path} is missing (reinstall the package)")
+    manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
+    scenes = manifest.get("scenes", {})
+    name = scene or (SAMPLE_SCENE if SAMPLE_SCENE in scenes else next(iter(scenes), None))
+    if name not in scenes:
+        raise ValueError(f"--scene: expected one of {', '.join(map(repr, scenes))}, got {name!r}")
+    entry = scenes[name]
+    truth = {float(g["t"]): DATA_DIR / g["view"] for g in entry.get("ground_truth", [])}
+    return DATA_DIR / entry["a"], DATA_DIR / entry["b"], truth
+
+
+def _to_png(color):
+    import numpy as np
+
+    if color.dtype in (np.uint8, np.uint16):
+        return color
+    return (np.clip(color, 0, 1) * 255 + 0.5).astype(np.uint8)
+
+
+def _to_float(color):
+    import numpy as np
+
+    if color.dtype == np.uint8:
+        return color.astype(np.float32) / 255
+    if color.dtype == np.uint16:
+        return color.astype(np.float32) / 65535
+    return color.astype(np.float32)
+
+
+def _metrics(color, truth):
+    """PSNR (dB) and SSIM of a frame against a ground-truth color image (scikit-image)."""
+    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+    a, b = _to_float(color), _to_float(truth)
+    psnr = peak_signal_noise_ratio(b, a, data_range=1.0)
+    ssim = structural_similarity(b, a, data_range=1.0, channel_axis=-1 if a.ndim == 3 else None)
+    return psnr, ssim
+
+
+def contact_sheet(images, labels, *, columns: int = 4, width: int = 256):
+    """One uint8 RGB image with the frames in a grid (scaled to ``width`` px) and a label each."""
+    import cv2
+    import numpy as np
+
+    tiles = []
+    for img, label in zip(images, labels):
+        img = _to_png(img)
+        if img.dtype == np.uint16:
+            img = (img // 257).astype(np.uint8)
+        if img.ndim == 2:
+            img = np.repeat(img[..., None], 3, -1)
+        img = img[..., :3]
+        h = max(1, round(img.shape[0] * width / img.shape[1]))
+        tile = cv2.resize(np.ascontiguousarray(img), (width, h), interpolation=cv2.INTER_AREA)
+        cv2.putText(tile, label, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(tile, label, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
+        tiles.append(tile)
+    columns = max(1, min(columns, len(tiles)))
+    rows = -(-len(tiles) // columns)
+    th = max(t.shape[0] for t in tiles)
+    sheet = np.zeros((rows * th, columns * width, 3), np.uint8)
+    for i, tile in enumerate(tiles):
+        r, c = divmod(i, columns)
+        sheet[r * th : r * th + tile.shape[0], c * width : (c + 1) * width] = tile
+    return sheet
+
+
+def write_video(path, frames, fps: float) -> None:
+    """Write uint8 RGB frames with OpenCV's VideoWriter (mp4v for .mp4, MJPG otherwise), atomically."""
+    from pathlib import Path
+
+    import cv2
+    import numpy as np
+
+    from ibr.io import atomic_path
+
+    path = Path(path)
+    if not fps > 0:
+        raise ValueError(f"--fps: expected a positive frame rate, got {fps}")
+    fourcc = cv2.VideoWriter_fourcc(*("mp4v" if path.suffix.lower() in (".mp4", ".m4v", ".mov") else "MJPG"))
+    h, w = frames[0].shape[:2]
+    with atomic_path(path) as tmp:
+        writer = cv2.VideoWriter(str(tmp), fourcc, float(fps), (w, h))
+        if not writer.isOpened():
+            raise OSError(f"--video: OpenCV cannot write {path.suffix or 'this'} video files here")
+        try:
+            for f in frames:
+                f = _to_png(f)
+                if f.dtype == np.uint16:
+                    f = (f // 257).astype(np.uint8)
+                if f.ndim == 2:
+                    f = np.repeat(f[..., None], 3, -1)
+                writer.write(np.ascontiguousarray(f[..., 2::-1]))  # RGB -> BGR
+        finally:
+            writer.release()
+
+
+def run(args) -> int:
+    import time
+    from pathlib import Path
+
+    import numpy as np
+
+    from commands._common import info, progress
+    from ibr.interpolate import iter_interpolate, source_mesh
+    from ibr.io import atomic_path, load_view, write_image
+
+    truth_paths = {}
+    if not args.views:
+        path_a, path_b, truth_paths = _sample_pair(args.scene)
+        info(f"interpolate: bundled sample pair {path_a.name} / {path_b.name}")
+    elif len(args.views) == 2:
+        if args.scene:
+            raise ValueError("--scene: only used without view files")
+        path_a, path_b = map(Path, args.views)
+    else:
+        raise ValueError(f"views: expected two view files A.json B.json (or none), got {len(args.views)}")
+
+    if args.frames is not None:
+        if args.frames < 1:
+            raise ValueError(f"--frames: expected N >= 1, got {args.frames}")
+        ts = [0.5] if args.frames == 1 else [i / (args.frames - 1) for i in range(args.frames)]
+    else:
+        ts = list(args.t) if args.t else [0.25, 0.5, 0.75]
+    for t in ts:
+        if not np.isfinite(t):
+            raise ValueError(f"--t: expected finite numbers, got {t}")
+
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out: {out} exists and is not a folder")
+    view_a, view_b = load_view(path_a), load_view(path_b)
+    out.mkdir(parents=True, exist_ok=True)
+
+    if args.method == "mesh":
+        t0 = time.perf_counter()
+        mesh_a, mesh_b = source_mesh(view_a), source_mesh(view_b)
+        info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads, built in {(time.perf_counter() - t0) * 1e3:.1f} ms "
+             "(once; reused for every frame)")
+
+    frames_iter = iter_interpolate(view_a, view_b, ts, method=args.method, composite_mode=args.composite,
+                                   fill=args.fill)
+    long_run = len(ts) > 10
+    if long_run:
+        frames_iter = progress(frames_iter, len(ts), "interpolate")
+    times, colors, labels, scores = [], [], [], []
+    ext = "." + args.format
+    t_prev = time.perf_counter()
+    for i, (t, frame) in enumerate(zip(ts, frames_iter)):
+        dt = time.perf_counter() - t_prev
+        times.append(dt)
+        name = f"frame_{i:03d}_t{t:.3f}"
+        color = _to_float(frame.color) if args.format == "exr" else _to_png(frame.color)
+        with atomic_path(out / (name + ext)) as tmp:
+            write_image(tmp, color)
+        if args.holes:
+            with atomic_path(out / (name + "_holes.png")) as tmp:
+                write_image(tmp, (frame.holes * 255).astype(np.uint8))
+        line = (f"frame {i + 1}/{len(ts)} t={t:.3f}: {dt * 1e3:6.1f} ms, holes {frame.hole_fraction:.3%} "
+                f"(filled {frame.filled.mean():.3%})")
+        truth = next((p for tt, p in truth_paths.items() if abs(tt - t) < 1e-9), None)
+        if truth is not None:
+            gt = load_view(truth).color
+            psnr, ssim = _metrics(frame.color, gt)
+            scores.append((psnr, ssim))
+            line += f", PSNR {psnr:.2f} dB, SSIM {ssim:.4f} vs {truth.name}"
+        if not long_run:
+            info(line)
+        colors.append(frame.color)
+        labels.append(f"t={t:.3f}")
+        t_prev = time.perf_counter()
+
+    info(f"wrote {len(ts)} frames to {out}/ (median {np.median(times) * 1e3:.1f} ms per frame, "
+         f"first frame {times[0] * 1e3:.1f} ms)")
+    if scores:
+        p = np.array(scores)
+        info(f"ground truth: mean PSNR {p[:, 0].mean():.2f} dB, mean SSIM {p[:, 1].mean():.4f} over {len(p)} frames")
+    if args.video:
+        write_video(args.video, colors, args.fps)
+        info(f"wrote video {args.video}")
+    if args.contact_sheet:
+        sheet = contact_sheet(colors, labels)
+        with atomic_path(Path(args.contact_sheet)) as tmp:
+            write_image(tmp, sheet)
+        info(f"wrote contact sheet {args.contact_sheet}")
+    return 0

@@ -1,0 +1,118 @@
+"""Two-source compositing and hole filling."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ibr.camera import Camera, interpolate_cameras
+from ibr.composite import composite, viewpoint_weights
+from ibr.fill import fill_background, fill_previous
+from ibr.render import Layer
+
+
+def layer(color, depth):
+    depth = np.asarray(depth, np.float32)
+    color = np.asarray(color, np.float32)
+    if color.ndim == 2:
+        color = np.repeat(color[..., None], 3, -1)
+    return Layer(color, depth, np.isfinite(depth))
+
+
+NAN = np.nan
+
+
+def test_blend_mixes_agreeing_depths_and_lets_the_nearer_surface_win():
+    za = np.array([[2.0, 2.0, 2.0, NAN, NAN]])
+    zb = np.array([[2.02, 5.0, 1.0, 3.0, NAN]])
+    a = layer(np.full((1, 5), 100.0), za)
+    b = layer(np.full((1, 5), 200.0), zb)
+    out = composite([a, b], [0.75, 0.25], depth_tol=0.02)
+    np.testing.assert_allclose(out.color[0, :, 0], [125.0, 100.0, 200.0, 200.0, 0.0])
+    np.testing.assert_allclose(out.depth[0, :4], [0.75 * 2 + 0.25 * 2.02, 2.0, 1.0, 3.0], rtol=1e-6)
+    assert np.isnan(out.depth[0, 4])
+    np.testing.assert_array_equal(out.coverage[0], [True, True, True, True, False])
+    # just outside the tolerance: no blend
+    out2 = composite([a, b], [0.75, 0.25], depth_tol=0.009)
+    assert out2.color[0, 0, 0] == 100.0
+
+
+def test_front_mode_is_the_seed_order():
+    """Nearer source (larger weight) in front even where the other is nearer in depth."""
+    a = layer(np.full((1, 3), 10.0), [[2.0, NAN, 4.0]])
+    b = layer(np.full((1, 3), 20.0), [[1.0, 3.0, NAN]])
+    out = composite([b, a], [0.4, 0.6], mode="front")  # a has the larger weight
+    np.testing.assert_array_equal(out.color[0, :, 0], [10.0, 20.0, 10.0])
+    np.testing.assert_array_equal(out.depth[0], [2.0, 3.0, 4.0])
+
+
+def test_integer_output_is_rounded_and_clipped():
+    a = layer(np.array([[10.0, 300.0, -5.0]]), [[1.0, 1.0, 1.0]])
+    b = layer(np.array([[11.0, 300.0, -5.0]]), [[1.0, 1.0, 1.0]])
+    out = composite([a, b], [0.5, 0.5], dtype=np.uint8)
+    assert out.color.dtype == np.uint8
+    np.testing.assert_array_equal(out.color[0, :, 0], [11, 255, 0])  # 10.5 rounds half up
+
+
+def test_viewpoint_weights_follow_t():
+    a = Camera.from_fov(8, 6, hfov_deg=60)
+    b = a.translated(np.array([1.0, 0, 0]))
+    for t in (0.0, 0.25, 0.5, 0.9):
+        w = viewpoint_weights(interpolate_cameras(a, b, t), [a, b])
+        np.testing.assert_allclose(w, [1 - t, t], atol=1e-12)
+
+
+def test_composite_errors():
+    a = layer(np.zeros((2, 2)), np.ones((2, 2)))
+    with pytest.raises(ValueError, match="mode: expected one of"):
+        composite([a, a], [1, 1], mode="max")
+    with pytest.raises(ValueError, match="weights: expected 2 non-negative"):
+        composite([a, a], [1, -1])
+    with pytest.raises(ValueError, match="layers: expected 1 or 2"):
+        composite([a, a, a], [1, 1, 1])
+    with pytest.raises(ValueError, match=r"layers\[1\]: color shape"):
+        composite([a, layer(np.zeros((3, 2)), np.ones((3, 2)))], [1, 1])
+
+
+# ----------------------------------------------------------------------------- fill
+def test_previous_fill_touches_only_hole_pixels():
+    rng = np.random.default_rng(0)
+    color = rng.integers(0, 256, (20, 30, 3), dtype=np.uint8)
+    depth = rng.uniform(1, 2, (20, 30)).astype(np.float32)
+    holes = rng.random((20, 30)) < 0.2
+    depth[holes] = np.nan
+    prev = rng.integers(0, 256, (20, 30, 3), dtype=np.uint8)
+    prev_z = rng.uniform(3, 4, (20, 30)).astype(np.float32)
+    out, z, filled = fill_previous(color, depth, holes, prev, prev_z)
+    np.testing.assert_array_equal(out[~holes], color[~holes])
+    np.testing.assert_array_equal(z[~holes], depth[~holes])
+    np.testing.assert_array_equal(out[holes], prev[holes])
+    np.testing.assert_array_equal(z[holes], prev_z[holes])
+    np.testing.assert_array_equal(filled, holes)
+    assert out is not color
+
+
+def test_background_fill_takes_the_far_side_of_a_disocclusion():
+    """Row: far wall (blue, z=5) | hole | near object (red, z=1): the hole gets blue only, with
+    the wall's depth; pixels outside the hole are untouched."""
+    color = np.zeros((5, 20, 3), np.uint8)
+    color[:, :8] = (0, 0, 255)
+    color[:, 12:] = (255, 0, 0)
+    depth = np.full((5, 20), 5.0, np.float32)
+    depth[:, 12:] = 1.0
+    holes = np.zeros((5, 20), bool)
+    holes[:, 8:12] = True
+    depth[holes] = np.nan
+    out, z, filled = fill_background(color, depth, holes)
+    np.testing.assert_array_equal(filled, holes)
+    np.testing.assert_array_equal(out[holes], np.broadcast_to([0, 0, 255], (20, 3)))
+    np.testing.assert_array_equal(z[holes], 5.0)
+    np.testing.assert_array_equal(out[~holes], color[~holes])
+
+
+def test_background_fill_reports_what_it_could_not_fill():
+    color = np.zeros((4, 4, 3), np.float32)
+    depth = np.full((4, 4), np.nan, np.float32)
+    holes = np.ones((4, 4), bool)
+    out, z, filled = fill_background(color, depth, holes)
+    assert not filled.any() and np.isnan(z).all()
