@@ -10,47 +10,52 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+#: Pixels sampled along each line by :func:`crease_split` (at most about this many).
+CREASE_SAMPLES = 32
+
 # ------------------------------------------------------------------ z'
 
 
 @njit(cache=True)
 def zprime_kernel(z, near, far, scale):
-    """z' = scale f/(f-n) (1 - n/z) (seed 002 eq. 2) as float64, NaN where z is not finite or <= 0;
-    also returns the uint8 invalid mask. ``far`` may be inf (ratio f/(f-n) = 1)."""
+    """z' = scale f/(f-n) (1 - n/z) (seed 002 eq. 2) as float64, NaN where z is not finite or <= 0.
+    ``far`` may be inf (ratio f/(f-n) = 1)."""
     h, w = z.shape
     ratio = 1.0 if np.isinf(far) else far / (far - near)
     a = scale * ratio
     b = scale * ratio * near
     zp = np.empty((h, w), np.float64)
-    inv = np.empty((h, w), np.uint8)
     for v in range(h):
         for u in range(w):
             x = np.float64(z[v, u])
-            if np.isfinite(x) and x > 0:
-                zp[v, u] = a - b / x
-                inv[v, u] = 0
-            else:
-                zp[v, u] = np.nan
-                inv[v, u] = 1
-    return zp, inv
+            zp[v, u] = a - b / x if (x > 0 and x < np.inf) else np.nan  # x > 0 is False for NaN
+    return zp
 
 
 @njit(cache=True)
 def valid_range(z):
-    """(min, max, count) of the valid (finite, > 0) values of ``z``; (nan, nan, 0) if none."""
-    lo = np.inf
-    hi = -np.inf
-    n = 0
-    for x in z.ravel():
-        if np.isfinite(x) and x > 0:
-            n += 1
-            if x < lo:
-                lo = x
-            if x > hi:
-                hi = x
+    """(min, max, count) of the valid (finite, > 0) values of a 2-D ``z``; (nan, nan, 0) if none."""
+    h, w = z.shape
+    los = np.full(h, np.inf)
+    his = np.full(h, -np.inf)
+    ns = np.zeros(h, np.int64)
+    for v in range(h):
+        lo = np.inf
+        hi = -np.inf
+        n = 0
+        for u in range(w):
+            x = np.float64(z[v, u])
+            if x > 0 and x < np.inf:  # False for NaN
+                n += 1
+                lo = min(lo, x)
+                hi = max(hi, x)
+        los[v] = lo
+        his[v] = hi
+        ns[v] = n
+    n = ns.sum()
     if n == 0:
         return np.nan, np.nan, 0
-    return np.float64(lo), np.float64(hi), n
+    return los.min(), his.max(), n
 
 
 # ------------------------------------------------------------------ per-pixel measures
@@ -120,26 +125,27 @@ def separate_measure(zp):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _pair_break(zm2, zm1, a, b, zp2, thr):
     """Break flag between samples a (index i) and b (i + 1) of a line, given the samples at
-    i - 2, i - 1, i + 2 (NaN when outside the line or invalid). See :func:`edge_breaks`."""
-    fa = np.isfinite(a)
-    fb = np.isfinite(b)
+    i - 2, i - 1, i + 2 (NaN when outside the line or invalid). See :func:`edge_breaks`.
+    ``x == x`` is the NaN test (z' holds NaN, never inf, for invalid pixels)."""
+    fa = a == a
+    fb = b == b
     if fa != fb:
         return 1
     if not fa:
         return 0
     # state of the centered stencil: 0 unavailable, 1 straight, 2 bent
     ci = 0
-    if np.isfinite(zm1):
+    if zm1 == zm1:
         ci = 2 if abs(zm1 - 2.0 * a + b) > thr else 1
     cj = 0
-    if np.isfinite(zp2):
+    if zp2 == zp2:
         cj = 2 if abs(a - 2.0 * b + zp2) > thr else 1
     if (ci == 2 or cj == 2) and ci != 1 and cj != 1:
         return 1  # every stencil straddling the pair is bent: a step or crease between i and i+1
-    if ci == 2 and cj == 1 and np.isfinite(zm2) and abs(zm2 - 2.0 * zm1 + a) <= thr:
+    if ci == 2 and cj == 1 and zm2 == zm2 and abs(zm2 - 2.0 * zm1 + a) <= thr:
         return 1  # crease exactly at i: both one-sided stencils at i are straight
     return 0
 
@@ -213,14 +219,19 @@ def _colcum(mask):
 @njit(cache=True)
 def _rowcum_t(mask):
     """(W+1, H) int32 prefix sums along each row, stored transposed: r[u, v] = sum(mask[v, :u]),
-    so that consecutive rows v of one column range are contiguous in memory."""
+    so that consecutive rows v of one column range are contiguous in memory. Written in blocks
+    of 32 columns so that the transposed writes stay in cache."""
     h, w = mask.shape
     r = np.zeros((w + 1, h), np.int32)
-    for v in range(h):
-        acc = 0
-        for u in range(w):
-            acc += mask[v, u]
-            r[u + 1, v] = acc
+    carry = np.zeros(h, np.int32)
+    for b0 in range(0, w, 32):
+        b1 = min(b0 + 32, w)
+        for v in range(h):
+            acc = carry[v]
+            for u in range(b0, b1):
+                acc += mask[v, u]
+                r[u + 1, v] = acc
+            carry[v] = acc
     return r
 
 
@@ -421,33 +432,47 @@ def label_rects(rects, h, w):
 # ------------------------------------------------------------------ binary split (edge-aware)
 
 
-@njit(cache=True)
 def edge_prefix(zp, thr):
-    """Prefix sums of the break edges of :func:`edge_breaks`, computed in one pass from z'.
+    """Prefix sums of the break edges of :func:`edge_breaks` (single-threaded: on a shared
+    2-core machine numba's parallel kernels measured slower than serial ones).
 
     Returns ``ch`` (H+1, W-1) int32 with ``ch[v, u] = sum(hb[:v, u])`` (breaks across the vertical
     grid line between columns u and u+1, rows above v) and ``rv`` (W+1, H-1) int32 with
     ``rv[u, v] = sum(vb[v, :u])`` (stored transposed so a scan over rows reads contiguous memory).
     """
+    return _colcum_breaks(zp, thr), _rowcum_t(_vertical_breaks(zp, thr))
+
+
+@njit(cache=True)
+def _colcum_breaks(zp, thr):
+    """Column prefix sums (H+1, W-1) of the horizontal-neighbor break flags, in one pass."""
     h, w = zp.shape
     nan = np.nan
-    ch = np.zeros((h + 1, max(w - 1, 0)), np.int32)
-    rv = np.zeros((w + 1, max(h - 1, 0)), np.int32)
+    ch = np.empty((h + 1, max(w - 1, 0)), np.int32)
+    for u in range(w - 1):
+        ch[0, u] = 0
     for v in range(h):
         for u in range(w - 1):
             zm2 = zp[v, u - 2] if u >= 2 else nan
             zm1 = zp[v, u - 1] if u >= 1 else nan
             zp2 = zp[v, u + 2] if u + 2 < w else nan
             ch[v + 1, u] = ch[v, u] + _pair_break(zm2, zm1, zp[v, u], zp[v, u + 1], zp2, thr)
+    return ch
+
+
+@njit(cache=True)
+def _vertical_breaks(zp, thr):
+    """(H-1, W) uint8 vertical-neighbor break flags (``vb`` of :func:`edge_breaks`)."""
+    h, w = zp.shape
+    nan = np.nan
+    vb = np.empty((max(h - 1, 0), w), np.uint8)
     for v in range(h - 1):
-        acc = 0
         for u in range(w):
             zm2 = zp[v - 2, u] if v >= 2 else nan
             zm1 = zp[v - 1, u] if v >= 1 else nan
             zp2 = zp[v + 2, u] if v + 2 < h else nan
-            acc += _pair_break(zm2, zm1, zp[v, u], zp[v + 1, u], zp2, thr)
-            rv[u + 1, v] = acc
-    return ch, rv
+            vb[v, u] = _pair_break(zm2, zm1, zp[v, u], zp[v + 1, u], zp2, thr)
+    return vb
 
 
 @njit(cache=True)
@@ -491,21 +516,27 @@ def crease_split(zp, u0, v0, u1, v1, peak):
     Per column (direction 0) and per row (direction 1) the mean |centered second difference|
     inside the rect is computed. When the most bent line stands out — its mean exceeds ``peak``
     times the average over the lines of that direction — it is a crease too shallow to be a break
-    edge, and the rect is cut there (ties: the first line). Otherwise (smooth curvature, or a
+    edge, and the rect is cut there (ties: the first line). Profiles use every
+    ``max(1, extent // CREASE_SAMPLES)``-th pixel along the line, so the cost per failed fit is
+    O((w + h) * CREASE_SAMPLES) rather than O(w * h). Otherwise (smooth curvature, or a
     rect too thin for a stencil) the rect is cut in the middle of its longer side.
     """
     w = u1 - u0
     h = v1 - v0
+    sv = max(1, h // CREASE_SAMPLES)  # lines are sampled: at most ~CREASE_SAMPLES per profile
+    su = max(1, w // CREASE_SAMPLES)
+    nsv = (h + sv - 1) // sv
+    nsu = (w + su - 1) // su
     best_u = -1.0
     cu = -1
     tot_u = 0.0
     if w >= 3:
         acc = np.zeros(w, np.float64)
-        for v in range(v0, v1):
+        for v in range(v0, v1, sv):
             for c in range(u0 + 1, u1 - 1):
                 acc[c - u0] += abs(zp[v, c - 1] - 2.0 * zp[v, c] + zp[v, c + 1])
         for c in range(u0 + 1, u1 - 1):
-            m = acc[c - u0] / h
+            m = acc[c - u0] / nsv
             tot_u += m
             if m > best_u:
                 best_u = m
@@ -519,11 +550,11 @@ def crease_split(zp, u0, v0, u1, v1, peak):
         acc = np.zeros(h, np.float64)
         for r in range(v0 + 1, v1 - 1):
             s = 0.0
-            for u in range(u0, u1):
+            for u in range(u0, u1, su):
                 s += abs(zp[r - 1, u] - 2.0 * zp[r, u] + zp[r + 1, u])
             acc[r - v0] = s
         for r in range(v0 + 1, v1 - 1):
-            m = acc[r - v0] / w
+            m = acc[r - v0] / nsu
             tot_v += m
             if m > best_v:
                 best_v = m

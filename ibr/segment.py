@@ -276,15 +276,17 @@ def _fit_max_residual_reference(zp, u0, v0, u1, v1):
 def _crease_split_reference(zp, u0, v0, u1, v1, peak):
     """Plain-Python twin of ``_segment_kernels.crease_split`` (same summation order)."""
     w, h = u1 - u0, v1 - v0
+    sv, su = max(1, h // _k.CREASE_SAMPLES), max(1, w // _k.CREASE_SAMPLES)
+    nsv, nsu = len(range(v0, v1, sv)), len(range(u0, u1, su))
     cu = cv = -1
     best_u = best_v = -1.0
     if w >= 3:
         means = []
         for c in range(u0 + 1, u1 - 1):
             acc = 0.0
-            for v in range(v0, v1):
+            for v in range(v0, v1, sv):
                 acc += abs(zp[v, c - 1] - 2.0 * zp[v, c] + zp[v, c + 1])
-            means.append(acc / h)
+            means.append(acc / nsv)
         tot = 0.0
         for i, m in enumerate(means):
             tot += m
@@ -296,9 +298,9 @@ def _crease_split_reference(zp, u0, v0, u1, v1, peak):
         means = []
         for r in range(v0 + 1, v1 - 1):
             acc = 0.0
-            for u in range(u0, u1):
+            for u in range(u0, u1, su):
                 acc += abs(zp[r - 1, u] - 2.0 * zp[r, u] + zp[r + 1, u])
-            means.append(acc / w)
+            means.append(acc / nsu)
         tot = 0.0
         for i, m in enumerate(means):
             tot += m
@@ -510,7 +512,7 @@ def segment(
     f = check_positive("far", far, allow_inf=True)
     if not f > n:
         raise ValueError(f"far: expected far > near, got near={near}, far={far}")
-    zp, _invalid = _k.zprime_kernel(z, n, f, ZPRIME_SCALE)
+    zp = _k.zprime_kernel(z, n, f, ZPRIME_SCALE)
     scale = zprime_per_inv_depth(n, f)
     if threshold is None:
         max_error_px = DEFAULT_MAX_ERROR_PX if max_error_px is None else max_error_px
