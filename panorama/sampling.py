@@ -152,14 +152,14 @@ def pad_faces(faces, *, interpolation: str = "linear", dtype=None) -> np.ndarray
     for f, face in enumerate(faces):
         atlas[f * (s + 2) + 1:f * (s + 2) + 1 + s, 1:s + 1] = face
     dr, dc, rows, cols, wts = _border_taps(s, interpolation)
-    taps = atlas[rows, cols].astype(np.float64)  # (N, T[, C])
-    w = wts.reshape(wts.shape + (1,) * (taps.ndim - 2))
+    taps = atlas[rows, cols]  # (N, T[, C])
+    work = np.float64 if dtype == np.float64 else np.float32
     with np.errstate(invalid="ignore"):  # NaN depth stays NaN
-        vals = np.sum(taps * w, axis=1)
+        vals = np.einsum("nt,nt...->n...", wts.astype(work), taps.astype(work, copy=False))
     if dtype.kind in "ui":
         info = np.iinfo(dtype)
         vals = np.clip(np.rint(vals), info.min, info.max)
-    atlas[dr, dc] = vals.astype(dtype)
+    atlas[dr, dc] = vals.astype(dtype, copy=False)
     return atlas
 
 
