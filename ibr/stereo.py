@@ -42,6 +42,7 @@ __all__ = [
     "StereoCamera",
     "auto_stereo",
     "comfort",
+    "interaxial_for_parallax",
     "max_interaxial",
     "max_interaxial_for_range",
     "parallax_angle_deg",
@@ -265,6 +266,16 @@ def parallax_px(z, *, e: float, f: float, focal_px: float) -> np.ndarray:
     """
     z = np.asarray(z, dtype=np.float64)
     return focal_px * e * (1.0 / f - 1.0 / z)
+
+
+def interaxial_for_parallax(parallax, z, *, f: float) -> np.ndarray:
+    """Eq. 11 with z > 0 in front: the interaxial ``e = P / (1 - f/z)`` that gives parallax P
+    (scene units on the zero-parallax plane) at depth z; the seed writes ``P z/(z + f)`` with
+    GL's z < 0. Undefined (inf) at z = f, where every e gives zero parallax."""
+    f = check_positive("f", f)
+    z = np.asarray(z, dtype=np.float64)
+    with np.errstate(divide="ignore"):
+        return np.asarray(parallax, dtype=np.float64) / (1.0 - f / z)
 
 
 def parallax_angle_deg(parallax, *, f: float) -> np.ndarray:

@@ -20,6 +20,7 @@ from ibr.stereo import (
     StereoCamera,
     auto_stereo,
     comfort,
+    interaxial_for_parallax,
     max_interaxial,
     max_interaxial_for_range,
     parallax_angle_deg,
@@ -147,6 +148,16 @@ def test_comfort_limits_and_seed_error():
     assert table1_camera().max_parallax_angle_deg(f / 2, np.inf) == pytest.approx(
         np.degrees(2 * np.arctan(0.088 / (2 * f))), abs=1e-12)
     assert table1_camera().max_parallax_angle_deg(f / 2, np.inf) > 1.6
+
+
+def test_eq11_inverts_eq9():
+    f = 3.144
+    z = np.array([2.0, 2.5, 5.0, 40.0])
+    p = parallax_scene(z, e=0.07, f=f)
+    np.testing.assert_allclose(interaxial_for_parallax(p, z, f=f), 0.07, rtol=1e-12)
+    # seed form with GL depth z_gl = -z and i = z_gl / f: e = P i / (1 + i)
+    i = -z / f
+    np.testing.assert_allclose(interaxial_for_parallax(p, z, f=f), p * i / (1 + i), rtol=1e-12)
 
 
 def test_max_interaxial_for_range_is_tight():
