@@ -96,6 +96,12 @@ def _face_table() -> np.ndarray:
 WORLD_FROM_FACE = _face_table()
 
 
+# Derived from the table (not a second table): which axis and sign each face's right (0) and
+# down (1) vectors are, e.g. face +x: right = -z -> axis 2, sign -1.
+_AXIS_OF = np.argmax(np.abs(WORLD_FROM_FACE), axis=1).T[:2]  # (2, 6)
+_SIGN_OF = np.stack([WORLD_FROM_FACE[np.arange(6), _AXIS_OF[k], k] for k in (0, 1)])  # (2, 6)
+
+
 def face_index(name: str) -> int:
     """Index 0..5 of a face given as ``'+x'``..``'-z'`` or ``'px'``..``'nz'``."""
     if name in FACE_NAMES:
@@ -189,11 +195,11 @@ def face_pixel_from_direction(d, face_size: int) -> tuple[np.ndarray, np.ndarray
     axis = np.argmax(np.abs(d), axis=-1)
     comp = np.take_along_axis(d, axis[..., None], axis=-1)[..., 0]
     face = 2 * axis + (comp < 0)
-    # local coordinates: a = d . right_f / d . forward_f, b = d . down_f / d . forward_f
-    right, down = WORLD_FROM_FACE[face, :, 0], WORLD_FROM_FACE[face, :, 1]
+    # local coordinates: a = d . right_f / d . forward_f, b = d . down_f / d . forward_f; right_f
+    # and down_f are signed unit axes, so each dot product picks one component of d
     inv = 1.0 / np.abs(comp)
-    a = np.einsum("...i,...i->...", d, right) * inv
-    b = np.einsum("...i,...i->...", d, down) * inv
+    a = np.take_along_axis(d, _AXIS_OF[0][face][..., None], axis=-1)[..., 0] * (_SIGN_OF[0][face] * inv)
+    b = np.take_along_axis(d, _AXIS_OF[1][face][..., None], axis=-1)[..., 0] * (_SIGN_OF[1][face] * inv)
     s = float(face_size)
     return face, (a + 1) * 0.5 * s - 0.5, (b + 1) * 0.5 * s - 0.5
 
