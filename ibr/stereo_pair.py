@@ -117,7 +117,7 @@ def map_pixels(view: View, *, dx: float, dz: float = 0.0, dpixel: float = 0.0,
     jump = check_positive("max_jump_px", max_jump_px, allow_inf=True)
     cam = view.camera
     col = np.asarray(view.color)
-    col = np.ascontiguousarray((col[..., None] if col.ndim == 2 else col).astype(np.float32))
+    col = np.ascontiguousarray((col[..., None] if col.ndim == 2 else col).astype(np.float32, copy=False))
     h, w, c = col.shape
     out_c = np.zeros((h, w, c), np.float32)
     out_z = np.full((h, w), np.inf, np.float32)
@@ -179,7 +179,7 @@ def _to_dtype(img: np.ndarray, dtype) -> np.ndarray:
     if np.dtype(dtype).kind in "ui":
         info = np.iinfo(dtype)
         return np.clip(np.rint(img), info.min, info.max).astype(dtype)
-    return img.astype(dtype)
+    return img.astype(dtype, copy=False)
 
 
 def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, mesh=None):
@@ -242,7 +242,10 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
             out[eye] = (col.copy(), view.depth.copy(), np.zeros(view.shape, bool))
             continue
         c, d, cov = _render_eye(view, cam, method, max_jump_px, mesh)
-        c, d, holes = fill_background(c, d, cov)
+        c = np.ascontiguousarray(c[..., None] if c.ndim == 2 else c, dtype=np.float32)
+        d = np.ascontiguousarray(d, dtype=np.float32)
+        holes = np.zeros(cov.shape, np.bool_)
+        _k.fill_rows_background(c, d, np.ascontiguousarray(cov), holes)  # in place (fresh arrays)
         out[eye] = (_to_dtype(c, np.asarray(view.color).dtype), d, holes)
     return StereoPair(out["left"][0], out["right"][0], out["left"][2], out["right"][2],
                       out["left"][1], out["right"][1], left_cam, right_cam)
