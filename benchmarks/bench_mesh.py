@@ -185,6 +185,7 @@ def segmentation_figure(scenes):
         crop = img[120:300, 180:420]
         crop = np.repeat(np.repeat(crop, 2, 0), 2, 1)
         label = f"{method} {'2^15' if kw else '0.5 px'}: {len(mesh)} quads, {mesh.one_pixel_share:.0%} one-pixel"
+        crop[:26] = 0
         cv2.putText(crop, label, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
         panels.append(crop)
         full = RESULTS / f"mesh_motorcycle_{method}.png"
