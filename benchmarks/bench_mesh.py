@@ -182,7 +182,7 @@ def segmentation_figure(scenes):
         seg = S.segment(view.depth, camera=view.camera, method=method, **kw)
         mesh = _mesh_from_segmentation(view.camera, view.depth, seg, time.perf_counter())
         img = segmentation_image(mesh, view.color)
-        crop = img[120:300, 180:420]
+        crop = img[140:290, 200:410]
         crop = np.repeat(np.repeat(crop, 2, 0), 2, 1)
         label = f"{method} {'2^15' if kw else '0.5 px'}: {len(mesh)} quads, {mesh.one_pixel_share:.0%} one-pixel"
         crop[:26] = 0
@@ -192,7 +192,7 @@ def segmentation_figure(scenes):
         cv2.imwrite(str(full), img[..., ::-1])
     pic = np.concatenate([panels[0], np.full((panels[0].shape[0], 6, 3), 255, np.uint8), panels[1]], 1)
     out = RESULTS / "mesh_motorcycle_segmentation.png"
-    cv2.imwrite(str(out), pic[..., ::-1])
+    cv2.imwrite(str(out), pic[..., ::-1], [cv2.IMWRITE_PNG_COMPRESSION, 9])
     shutil.copy(out, DOCS / out.name)
     print(f"wrote {out} (copied to docs/img)")
 
