@@ -203,22 +203,23 @@ def bucket_bands(bbox, height, nbands):
 
 
 def _raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quads, far_coord,
-                  inv_z, map_u, map_v, quad_id, depth, coverage):
+                  depth, map_u, map_v, coverage):
     """Z-buffered rasterization of quads into source-coordinate maps, one band of target rows
     per parallel task (each band owns its rows: no write races).
 
-    inv_z (H, W) float64 scratch z-buffer of 1/z_t; map_u/map_v (H, W) float32 and quad_id
-    (H, W) int32 receive the source pixel coordinates and quad index of the nearest quad per
-    target pixel (far_coord / -1 where uncovered); depth (H, W) float32 = z_t (NaN uncovered),
-    coverage (H, W) bool. clamp (Q, 4) uint8 flags [left, top, right, bottom]: when set, the
-    sample position is clamped to the rect's outer pixel *centers* on that side so that bilinear
-    sampling never reads across a depth edge.
+    depth (H, W) float32 serves as the z-buffer of 1/z_t while rasterizing and receives z_t
+    (NaN where uncovered) at the end; map_u/map_v (H, W) float32 receive the source pixel
+    coordinates of the nearest quad per target pixel (far_coord where uncovered); coverage (H, W)
+    bool. clamp (Q, 4) uint8 flags [left, top, right, bottom]: when set, the sample position is
+    clamped to the rect's outer pixel *centers* on that side so that bilinear sampling never
+    reads across a depth edge.
     """
     nbands = band_start.shape[0] - 1
     rows_per_band = (height + nbands - 1) // nbands
     for band in prange(nbands):
         r0 = band * rows_per_band
         r1 = min(height, r0 + rows_per_band)
+        inv_z = depth
         for v in range(r0, r1):
             for u in range(width):
                 inv_z[v, u] = 0.0
@@ -288,7 +289,6 @@ def _raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quad
                     inv_z[v, u] = iz
                     map_u[v, u] = us
                     map_v[v, u] = vs
-                    quad_id[v, u] = q
         for v in range(r0, r1):
             for u in range(width):
                 iz = inv_z[v, u]
@@ -300,7 +300,6 @@ def _raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quad
                     coverage[v, u] = False
                     map_u[v, u] = far_coord
                     map_v[v, u] = far_coord
-                    quad_id[v, u] = -1
 
 
 raster_quads = njit(cache=True, parallel=True)(_raster_quads)
@@ -583,3 +582,70 @@ def background_fill(color, depth, holes, rel_tol, max_dist, is_int, filled):
                     zacc += cz[k] / cd[k]
             depth[v, u] = zacc / wsum
             filled[v, u] = True
+
+
+@njit(cache=True, inline="always")
+def _bilinear(src, x, y, ch):
+    """Bilinear sample of src (H, W, C) at pixel coordinates (x, y) (centers at integers);
+    taps outside the image are clamped to the border pixels."""
+    h, w = src.shape[0], src.shape[1]
+    fx0 = np.floor(x)
+    fy0 = np.floor(y)
+    ax = x - fx0
+    ay = y - fy0
+    x0 = min(max(int(fx0), 0), w - 1)
+    x1 = min(max(int(fx0) + 1, 0), w - 1)
+    y0 = min(max(int(fy0), 0), h - 1)
+    y1 = min(max(int(fy0) + 1, 0), h - 1)
+    top = src[y0, x0, ch] + ax * (src[y0, x1, ch] - src[y0, x0, ch])
+    bot = src[y1, x0, ch] + ax * (src[y1, x1, ch] - src[y1, x0, ch])
+    return top + ay * (bot - top)
+
+
+@njit(cache=True, parallel=True)
+def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
+                      out, depth, coverage):
+    """Fused bilinear sampling + two-layer composite (see composite2): layer colors are sampled
+    from the float32 sources sa, sb at the maps (ua, va), (ub, vb) only where they are used, so
+    no layer color image is ever written. ``single``: only layer a exists."""
+    h, w, nc = out.shape
+    for v in prange(h):
+        for u in range(w):
+            a = za[v, u]
+            has_a = a > 0.0
+            b = np.nan
+            has_b = False
+            if not single:
+                b = zb[v, u]
+                has_b = b > 0.0
+            if has_a and has_b:
+                if blend and abs(a - b) <= rel_tol * min(a, b):
+                    xa, ya, xb, yb = ua[v, u], va[v, u], ub[v, u], vb[v, u]
+                    for ch in range(nc):
+                        x = wa * _bilinear(sa, xa, ya, ch) + wb * _bilinear(sb, xb, yb, ch)
+                        _store(out, v, u, ch, x, is_int, maxval)
+                    depth[v, u] = wa * a + wb * b
+                elif (not blend) or a <= b:
+                    for ch in range(nc):
+                        _store(out, v, u, ch, _bilinear(sa, ua[v, u], va[v, u], ch), is_int, maxval)
+                    depth[v, u] = a
+                else:
+                    for ch in range(nc):
+                        _store(out, v, u, ch, _bilinear(sb, ub[v, u], vb[v, u], ch), is_int, maxval)
+                    depth[v, u] = b
+                coverage[v, u] = True
+            elif has_a:
+                for ch in range(nc):
+                    _store(out, v, u, ch, _bilinear(sa, ua[v, u], va[v, u], ch), is_int, maxval)
+                depth[v, u] = a
+                coverage[v, u] = True
+            elif has_b:
+                for ch in range(nc):
+                    _store(out, v, u, ch, _bilinear(sb, ub[v, u], vb[v, u], ch), is_int, maxval)
+                depth[v, u] = b
+                coverage[v, u] = True
+            else:
+                for ch in range(nc):
+                    out[v, u, ch] = 0
+                depth[v, u] = np.nan
+                coverage[v, u] = False

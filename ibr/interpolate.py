@@ -25,9 +25,9 @@ import numpy as np
 
 from ._validate import check_choice, check_finite_scalar, check_positive
 from .camera import Camera, interpolate_cameras
-from .composite import COMPOSITE_MODES, composite, viewpoint_weights
+from .composite import COMPOSITE_MODES, composite, sample_composite, viewpoint_weights
 from .fill import FILLS, fill_background, fill_previous
-from .render import FOOTPRINTS, INTERPOLATIONS, Layer, as_float_color, rasterize_mesh, sample_maps
+from .render import FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_into, as_float_color, sample_maps, scratch, scratch_maps
 from .view import View
 
 __all__ = [
@@ -135,16 +135,32 @@ def _check_source(view, name: str) -> None:
         )
 
 
-def _layer(view: View, camera: Camera, method: str, footprint: str, splat: str, mesh_options: dict,
-           interpolation: str = "linear") -> Layer:
-    src = _source(view)
+def _maps(view: View, camera: Camera, method: str, footprint: str, splat: str, mesh_options: dict, slot: str):
+    """Where each target pixel samples ``view`` (per-thread scratch buffers of ``slot``, valid
+    until the next call with the same slot; internal use only)."""
     if method == "mesh":
-        maps = rasterize_mesh(source_mesh(view, **mesh_options), camera, footprint=footprint)
-    else:
-        from .forward import forward_maps
+        return _rasterize_into(source_mesh(view, **mesh_options), camera, footprint, 0.01,
+                               scratch_maps(slot, camera.shape))
+    from .forward import forward_maps
 
-        maps = forward_maps(view.depth, view.camera, camera, splat=splat)
-    return Layer(sample_maps(src.color, maps.map_u, maps.map_v, interpolation=interpolation), maps.depth, maps.coverage)
+    return forward_maps(view.depth, view.camera, camera, splat=splat)
+
+
+def _render(views, camera, weights, *, method, footprint, splat, mesh_options, interpolation, composite_mode,
+            depth_tol, dtype):
+    """Render one or two sources into ``camera`` and composite them (output arrays are fresh)."""
+    maps = [_maps(v, camera, method, footprint, splat, mesh_options, slot) for v, slot in zip(views, "ab")]
+    if not any(m.coverage.any() for m in maps):
+        return None
+    colors = [_source(v).color for v in views]
+    if interpolation == "linear":  # fused numba pass (no layer images, no OpenCV thread pool)
+        return sample_composite(colors, maps, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype)
+    layers = []
+    for m, c, slot in zip(maps, colors, "ab"):
+        buf = scratch((slot, "color"), (*camera.shape, c.shape[2]), np.float32)
+        layers.append(Layer(sample_maps(c, m.map_u, m.map_v, interpolation=interpolation, out=buf), m.depth,
+                            m.coverage))
+    return composite(layers, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype)
 
 
 def _finish(comp, camera, t, fill, previous, out_2d) -> Rendering:
@@ -228,10 +244,11 @@ def warp(
     check_choice("interpolation", interpolation, INTERPOLATIONS)
     _check_source(view, "view")
     camera = _check_target(camera)
-    layer = _layer(view, camera, method, footprint, splat, dict(mesh_options or {}), interpolation)
-    if not layer.coverage.any():
+    comp = _render([view], camera, [1.0], method=method, footprint=footprint, splat=splat,
+                   mesh_options=dict(mesh_options or {}), interpolation=interpolation, composite_mode="blend",
+                   depth_tol=0.02, dtype=view.color.dtype)
+    if comp is None:
         raise _nothing_seen(camera, [view.name], None)
-    comp = composite([layer], [1.0], dtype=view.color.dtype)
     return _finish(comp, camera, None, fill, None, view.color.ndim == 2)
 
 
@@ -292,12 +309,12 @@ def iter_interpolate(
     opts = dict(mesh_options or {})
     previous = None
     for cam, tv in zip(cams, ts):
-        la = _layer(view_a, cam, method, footprint, splat, opts, interpolation)
-        lb = _layer(view_b, cam, method, footprint, splat, opts, interpolation)
-        if not (la.coverage.any() or lb.coverage.any()):
-            raise _nothing_seen(cam, [view_a.name, view_b.name], tv)
         w = viewpoint_weights(cam, [view_a.camera, view_b.camera])
-        comp = composite([la, lb], w, mode=composite_mode, depth_tol=depth_tol, dtype=view_a.color.dtype)
+        comp = _render([view_a, view_b], cam, w, method=method, footprint=footprint, splat=splat, mesh_options=opts,
+                       interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
+                       dtype=view_a.color.dtype)
+        if comp is None:
+            raise _nothing_seen(cam, [view_a.name, view_b.name], tv)
         previous = _finish(comp, cam, tv, fill, previous, view_a.color.ndim == 2)
         yield previous
 

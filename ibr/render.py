@@ -21,6 +21,7 @@ Conventions
 
 from __future__ import annotations
 
+import threading
 import weakref
 from dataclasses import dataclass
 
@@ -174,6 +175,16 @@ def rasterize_mesh(mesh, camera: Camera, *, footprint: str = "free", depth_tol: 
     -------
     SourceMaps
     """
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera: expected a Camera, got {type(camera).__name__}")
+    h, w = camera.height, camera.width
+    out = SourceMaps(np.empty((h, w), np.float32), np.empty((h, w), np.float32), np.empty((h, w), np.float32),
+                     np.empty((h, w), np.bool_))
+    return _rasterize_into(mesh, camera, footprint, depth_tol, out)
+
+
+def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out: SourceMaps) -> SourceMaps:
+    """:func:`rasterize_mesh` writing into preallocated (H, W) arrays ``out`` (all overwritten)."""
     check_choice("footprint", footprint, FOOTPRINTS)
     depth_tol = check_positive("depth_tol", depth_tol)
     if not isinstance(camera, Camera):
@@ -186,20 +197,38 @@ def rasterize_mesh(mesh, camera: Camera, *, footprint: str = "free", depth_tol: 
     nq = len(mesh.rects)
     coef = np.empty((nq, 12), np.float64)
     bbox = np.empty((nq, 4), np.int32)
-    inv_z = np.empty((h, w), np.float64)
-    map_u = np.empty((h, w), np.float32)
-    map_v = np.empty((h, w), np.float32)
-    quad_id = np.empty((h, w), np.int32)
-    depth = np.empty((h, w), np.float32)
-    coverage = np.empty((h, w), np.bool_)
     setup = _k.setup_quads if nq >= _PARALLEL_QUADS else _k.setup_quads_serial
     setup(mesh.rects, mesh.inv_depth_planes, _intrinsics(src), r, t, kt_inv, kt, w, h, coef, bbox)
     flags = _clamp_flags(mesh, footprint, depth_tol)
-    nbands = _nbands(h)
-    start, order = _k.bucket_bands(bbox, h, nbands)
+    start, order = _k.bucket_bands(bbox, h, _nbands(h))
     raster = _k.raster_quads if h * w >= _PARALLEL_PIXELS else _k.raster_quads_serial
-    raster(mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, inv_z, map_u, map_v, quad_id, depth, coverage)
-    return SourceMaps(map_u, map_v, depth, coverage)
+    raster(mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, out.depth, out.map_u, out.map_v, out.coverage)
+    return out
+
+
+_scratch_local = threading.local()
+
+
+def scratch(key, shape, dtype) -> np.ndarray:
+    """A reusable per-thread work array (contents undefined) for internal, short-lived results.
+
+    Reusing the pages avoids the page faults of a fresh multi-megabyte allocation per frame
+    (several ms at 1920x1080). Never hand a scratch array to a caller.
+    """
+    store = getattr(_scratch_local, "arrays", None)
+    if store is None:
+        store = _scratch_local.arrays = {}
+    k = (key, tuple(shape), np.dtype(dtype).str)
+    a = store.get(k)
+    if a is None:
+        a = store[k] = np.empty(shape, dtype)
+    return a
+
+
+def scratch_maps(key, shape) -> SourceMaps:
+    """Reusable :class:`SourceMaps` buffers for ``key`` (see :func:`scratch`)."""
+    return SourceMaps(scratch((key, "u"), shape, np.float32), scratch((key, "v"), shape, np.float32),
+                      scratch((key, "z"), shape, np.float32), scratch((key, "c"), shape, np.bool_))
 
 
 def as_float_color(color) -> np.ndarray:
@@ -212,7 +241,8 @@ def as_float_color(color) -> np.ndarray:
     return np.ascontiguousarray(c)
 
 
-def sample_maps(color_f32: np.ndarray, map_u: np.ndarray, map_v: np.ndarray, *, interpolation: str = "linear") -> np.ndarray:
+def sample_maps(color_f32: np.ndarray, map_u: np.ndarray, map_v: np.ndarray, *, interpolation: str = "linear",
+                out: np.ndarray | None = None) -> np.ndarray:
     """``cv2.remap`` of a float32 (H, W, C) image at source coordinates (centers at integers:
     map value 3.0 reads pixel column 3 exactly, 3.5 averages columns 3 and 4 bilinearly).
 
@@ -225,11 +255,14 @@ def sample_maps(color_f32: np.ndarray, map_u: np.ndarray, map_v: np.ndarray, *, 
     c = color_f32.shape[2]
     if c > 4:
         raise ValueError(f"color: at most 4 channels, got {c}")
-    out = cv2.remap(color_f32, map_u, map_v, INTERPOLATIONS[interpolation], borderMode=cv2.BORDER_CONSTANT,
+    if out is not None:
+        dst = out[..., 0] if c == 1 else out
+        cv2.remap(color_f32, map_u, map_v, INTERPOLATIONS[interpolation], dst=dst, borderMode=cv2.BORDER_CONSTANT,
+                  borderValue=0)
+        return out
+    res = cv2.remap(color_f32, map_u, map_v, INTERPOLATIONS[interpolation], borderMode=cv2.BORDER_CONSTANT,
                     borderValue=0)
-    if out.ndim == 2:
-        out = out[..., None]
-    return out
+    return res[..., None] if res.ndim == 2 else res
 
 
 def render_mesh(
