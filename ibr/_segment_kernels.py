@@ -58,6 +58,30 @@ def valid_range(z):
     return los.min(), his.max(), n
 
 
+@njit(cache=True)
+def inv_depth_range(z):
+    """(q, zmin, zmax, count): q = 1/z as float64 (NaN where z is not finite or <= 0) and the
+    range and count of the valid depth, in one pass. (nan, nan, 0) range when nothing is valid."""
+    h, w = z.shape
+    q = np.empty((h, w), np.float64)
+    lo = np.inf
+    hi = -np.inf
+    n = 0
+    for v in range(h):
+        for u in range(w):
+            x = np.float64(z[v, u])
+            if x > 0 and x < np.inf:  # False for NaN
+                q[v, u] = 1.0 / x
+                n += 1
+                lo = min(lo, x)
+                hi = max(hi, x)
+            else:
+                q[v, u] = np.nan
+    if n == 0:
+        return q, np.nan, np.nan, 0
+    return q, lo, hi, n
+
+
 # ------------------------------------------------------------------ per-pixel measures
 
 
@@ -443,20 +467,47 @@ def edge_prefix(zp, thr):
     return _colcum_breaks(zp, thr), _rowcum_t(_vertical_breaks(zp, thr))
 
 
+@njit(cache=True, inline="always")
+def _stencil_state(a, c, b, thr):
+    """Centered second difference a - 2c + b: 0 unavailable (a NaN sample), 1 straight, 2 bent."""
+    if a == a and c == c and b == b:
+        return 2 if abs(a - 2.0 * c + b) > thr else 1
+    return 0
+
+
+@njit(cache=True, inline="always")
+def _flag(sm1, s0, s1, fa, fb):
+    """Break flag of pair (i, i+1) from the stencil states at i-1, i, i+1 and the validity of
+    samples i and i+1 (same rule as :func:`_pair_break`: the one-sided stencil at i is the
+    centered one at i-1)."""
+    if fa != fb:
+        return 1
+    if not fa:
+        return 0
+    if (s0 == 2 or s1 == 2) and s0 != 1 and s1 != 1:
+        return 1
+    if s0 == 2 and s1 == 1 and sm1 == 1:
+        return 1
+    return 0
+
+
 @njit(cache=True)
 def _colcum_breaks(zp, thr):
     """Column prefix sums (H+1, W-1) of the horizontal-neighbor break flags, in one pass."""
     h, w = zp.shape
-    nan = np.nan
     ch = np.empty((h + 1, max(w - 1, 0)), np.int32)
+    st = np.zeros(w + 1, np.int8)  # st[u] = state at u; st[w] stays 0
     for u in range(w - 1):
         ch[0, u] = 0
     for v in range(h):
+        for u in range(1, w - 1):
+            st[u] = _stencil_state(zp[v, u - 1], zp[v, u], zp[v, u + 1], thr)
+        prev = 0
         for u in range(w - 1):
-            zm2 = zp[v, u - 2] if u >= 2 else nan
-            zm1 = zp[v, u - 1] if u >= 1 else nan
-            zp2 = zp[v, u + 2] if u + 2 < w else nan
-            ch[v + 1, u] = ch[v, u] + _pair_break(zm2, zm1, zp[v, u], zp[v, u + 1], zp2, thr)
+            a = zp[v, u]
+            b = zp[v, u + 1]
+            ch[v + 1, u] = ch[v, u] + _flag(prev, st[u], st[u + 1], a == a, b == b)
+            prev = st[u]
     return ch
 
 
@@ -464,14 +515,23 @@ def _colcum_breaks(zp, thr):
 def _vertical_breaks(zp, thr):
     """(H-1, W) uint8 vertical-neighbor break flags (``vb`` of :func:`edge_breaks`)."""
     h, w = zp.shape
-    nan = np.nan
     vb = np.empty((max(h - 1, 0), w), np.uint8)
+    if h < 2:
+        return vb
+    s_prev = np.zeros(w, np.int8)  # states at row v - 1
+    s_cur = np.zeros(w, np.int8)  # row v (0 for v = 0)
+    s_next = np.zeros(w, np.int8)  # row v + 1
     for v in range(h - 1):
+        if v + 2 < h:
+            for u in range(w):
+                s_next[u] = _stencil_state(zp[v, u], zp[v + 1, u], zp[v + 2, u], thr)
+        else:
+            s_next[:] = 0
         for u in range(w):
-            zm2 = zp[v - 2, u] if v >= 2 else nan
-            zm1 = zp[v - 1, u] if v >= 1 else nan
-            zp2 = zp[v + 2, u] if v + 2 < h else nan
-            vb[v, u] = _pair_break(zm2, zm1, zp[v, u], zp[v + 1, u], zp2, thr)
+            a = zp[v, u]
+            b = zp[v + 1, u]
+            vb[v, u] = _flag(s_prev[u], s_cur[u], s_next[u], a == a, b == b)
+        s_prev, s_cur, s_next = s_cur, s_next, s_prev
     return vb
 
 

@@ -264,8 +264,7 @@ def build_mesh(
 def _mesh_from_segmentation(camera, depth, seg, t0) -> QuadMesh:
     from ._segment_kernels import fit_planes_inv_depth, label_rects
 
-    q = _inv_depth(depth)
-    planes = fit_planes_inv_depth(q, seg.rects)
+    planes = fit_planes_inv_depth(seg.inv_depth, seg.rects)
     h, w = camera.shape
     qop = label_rects(seg.rects, h, w)
     info = {

@@ -371,7 +371,8 @@ def split_rects(
     Parameters
     ----------
     zp : (H, W) float
-        Nonlinear depth z' (:func:`zprime`), NaN where invalid. Invalid pixels belong to no rect.
+        Nonlinear depth z' (:func:`zprime`), NaN where invalid, or any buffer affine in it with
+        thresholds in its units (:func:`segment` passes 1/z). Invalid pixels belong to no rect.
     method : {"edge", "separate", "paper"}
         See the module docstring.
     threshold : float
@@ -438,11 +439,11 @@ class Segmentation:
 
     ``threshold`` and ``tolerance`` are in z' units; ``tolerance_inv_depth`` is the guaranteed
     max |plane residual| in 1/z (``edge`` method only, else None); ``seconds`` the wall time of
-    z' + measure + split.
+    1/z + measure + split. ``inv_depth`` is 1/z (NaN where invalid); :attr:`zprime` gives z'.
     """
 
     rects: np.ndarray
-    zprime: np.ndarray
+    inv_depth: np.ndarray
     near: float
     far: float
     method: str
@@ -452,6 +453,12 @@ class Segmentation:
     max_error_px: float | None
     baseline: float | None
     seconds: float
+
+    @property
+    def zprime(self) -> np.ndarray:
+        """z' = 2^24 f/(f-n) (1 - n/z) of the segmented depth (seed eq. 2), NaN where invalid."""
+        ratio = 1.0 if np.isinf(self.far) else self.far / (self.far - self.near)
+        return ZPRIME_SCALE * ratio - zprime_per_inv_depth(self.near, self.far) * self.inv_depth
 
 
 def segment(
@@ -500,7 +507,10 @@ def segment(
         z = z.astype(np.float64)
     z = np.ascontiguousarray(z)
     t0 = time.perf_counter()
-    lo, hi, count = _k.valid_range(z)
+    # The split runs on q = 1/z: z' = A - B q is affine in q, so every decision (second
+    # differences over a threshold, plane-fit residuals, crease profiles) is the same with the
+    # z' thresholds divided by B, and the fit residual is directly the 1/z error that is bounded.
+    q, lo, hi, count = _k.inv_depth_range(z)
     if count == 0 and (near is None or far is None):
         raise ValueError("depth: no valid pixel (all NaN, inf or <= 0)")
     if near is None or far is None:
@@ -512,7 +522,6 @@ def segment(
     f = check_positive("far", far, allow_inf=True)
     if not f > n:
         raise ValueError(f"far: expected far > near, got near={near}, far={far}")
-    zp = _k.zprime_kernel(z, n, f, ZPRIME_SCALE)
     scale = zprime_per_inv_depth(n, f)
     if threshold is None:
         max_error_px = DEFAULT_MAX_ERROR_PX if max_error_px is None else max_error_px
@@ -526,14 +535,14 @@ def segment(
         thr = check_positive("threshold", threshold)
     if method == "edge":
         bf = check_positive("break_fraction", break_fraction)
-        rects = split_rects(zp, method=method, threshold=thr, break_threshold=bf * thr)
+        rects = split_rects(q, method=method, threshold=thr / scale, break_threshold=bf * thr / scale)
     else:
-        rects = split_rects(zp, method=method, threshold=thr, min_band=min_band)
+        rects = split_rects(q, method=method, threshold=thr / scale, min_band=min_band)
     seconds = time.perf_counter() - t0
     tol = thr if method == "edge" else None
     return Segmentation(
         rects=rects,
-        zprime=zp,
+        inv_depth=q,
         near=n,
         far=f,
         method=method,
