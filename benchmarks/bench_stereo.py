@@ -98,7 +98,7 @@ def bench_speed(repeats: int) -> list[tuple[str, float, float]]:
         ("pre-distortion, chromatic (3 maps)",
          median_time(lambda: predistort(pair.left, (RadialDistortion(0.23, 0.24), lens, RadialDistortion(0.21, 0.24))),
                      max(1, repeats // 2)), base_f),
-        ("time-warp step (homography maps + remap)", median_time(lambda: warp_rotation(band_img, band, dst), repeats), base_f),
+        ("time-warp step (warpPerspective + band mask)", median_time(lambda: warp_rotation(band_img, band, dst), repeats), base_f),
         ("time-warp, explicit maps (fallback path)", median_time(lambda: rotation_maps(band, dst), repeats), base_f),
     ]
     print(f"\n{'operation at 1920x1080':48s} {'median ms':>10s} {'x remap':>8s}")
