@@ -272,3 +272,16 @@ def test_edge_split_fit_path_matches_reference(seed):
         for u0, v0, u1, v1 in got:
             if (u1 - u0) * (v1 - v0) > 1:
                 assert S._fit_max_residual_reference(zp, u0, v0, u1, v1) <= tol * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("method", ["paper", "separate", "edge"])
+def test_segment_on_inverse_depth_equals_split_on_zprime(method):
+    """segment() splits 1/z with thresholds divided by dz'/d(1/z); same rects as on z' itself."""
+    cam = Camera.from_fov(29, 23, hfov_deg=60)
+    for seed in range(3):
+        z = piecewise_scene(seed)
+        seg = S.segment(z, camera=cam, method=method, threshold=2.0**16)
+        zp, n, f = S.zprime(z)
+        assert (seg.near, seg.far) == (n, f)
+        np.testing.assert_allclose(seg.zprime, zp, rtol=1e-12, atol=1e-5)
+        assert seg.rects.tolist() == S.split_rects(zp, method=method, threshold=2.0**16).tolist()
