@@ -270,6 +270,7 @@ def test_one_pixel_thick_images(shape):
     assert len(mesh) == 1
     check_bound(mesh, z)
     np.testing.assert_allclose(mesh.depth(), z, rtol=2e-6)
+    assert np.array_equal(mesh_depth(mesh), mesh.depth(), equal_nan=True)
     if shape != (1, 1):
         z2 = z.copy().ravel()
         z2[20:] *= 0.5  # a step

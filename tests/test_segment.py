@@ -12,7 +12,7 @@ import pytest
 from ibr import _segment_kernels as K
 from ibr import segment as S
 from ibr.camera import Camera
-from ibr.depth import fixed_from_z, z_from_fixed, zprime_from_z
+from ibr.depth import zprime_from_z
 
 CAM = Camera.from_fov(48, 40, hfov_deg=70)
 
@@ -21,11 +21,6 @@ def plane_depth(cam: Camera, n) -> np.ndarray:
     """Planar depth of the plane n·X = 1 seen by ``cam`` (camera frame), float64."""
     r = cam.rays_cam()
     return 1.0 / (r @ np.asarray(n, float))
-
-
-def inv_rows_cols(cam):
-    u, v = cam.pixel_grid()
-    return u, v
 
 
 def piecewise_scene(seed: int, h=23, w=29) -> np.ndarray:
