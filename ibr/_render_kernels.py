@@ -426,13 +426,10 @@ def finish_splat(zbuf, map_u, map_v, depth, coverage, far_coord):
 # ------------------------------------------------------------------------- compositing
 @njit(cache=True, inline="always")
 def _store(out, v, u, ch, x, is_int, maxval):
-    if is_int:
-        x = np.floor(x + 0.5)
-        if x < 0.0:
-            x = 0.0
-        elif x > maxval:
-            x = maxval
-    out[v, u, ch] = x
+    if is_int:  # round half up and clip: truncation of x + 0.5 clipped to [0, maxval + 0.5)
+        out[v, u, ch] = min(max(x + 0.5, 0.0), maxval)
+    else:
+        out[v, u, ch] = x
 
 
 @njit(cache=True, parallel=True)
@@ -585,21 +582,30 @@ def background_fill(color, depth, holes, rel_tol, max_dist, is_int, filled):
 
 
 @njit(cache=True, inline="always")
-def _bilinear(src, x, y, ch):
-    """Bilinear sample of src (H, W, C) at pixel coordinates (x, y) (centers at integers);
-    taps outside the image are clamped to the border pixels."""
+def _taps(src, x, y):
+    """Bilinear taps of src (H, W, C) at pixel coordinates (x, y) (centers at integers); taps
+    outside the image are clamped to the border pixels."""
     h, w = src.shape[0], src.shape[1]
     fx0 = np.floor(x)
     fy0 = np.floor(y)
-    ax = x - fx0
-    ay = y - fy0
-    x0 = min(max(int(fx0), 0), w - 1)
-    x1 = min(max(int(fx0) + 1, 0), w - 1)
-    y0 = min(max(int(fy0), 0), h - 1)
-    y1 = min(max(int(fy0) + 1, 0), h - 1)
+    ix = int(fx0)
+    iy = int(fy0)
+    return (min(max(ix, 0), w - 1), min(max(ix + 1, 0), w - 1), min(max(iy, 0), h - 1),
+            min(max(iy + 1, 0), h - 1), np.float32(x - fx0), np.float32(y - fy0))
+
+
+@njit(cache=True, inline="always")
+def _lerp(src, x0, x1, y0, y1, ax, ay, ch):
     top = src[y0, x0, ch] + ax * (src[y0, x1, ch] - src[y0, x0, ch])
     bot = src[y1, x0, ch] + ax * (src[y1, x1, ch] - src[y1, x0, ch])
     return top + ay * (bot - top)
+
+
+@njit(cache=True, inline="always")
+def _sample_store(src, x, y, out, v, u, is_int, maxval):
+    x0, x1, y0, y1, ax, ay = _taps(src, x, y)
+    for ch in range(out.shape[2]):
+        _store(out, v, u, ch, _lerp(src, x0, x1, y0, y1, ax, ay, ch), is_int, maxval)
 
 
 @njit(cache=True, parallel=True)
@@ -613,35 +619,32 @@ def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel
         for u in range(w):
             a = za[v, u]
             has_a = a > 0.0
-            b = np.nan
+            b = np.float32(np.nan)
             has_b = False
             if not single:
                 b = zb[v, u]
                 has_b = b > 0.0
             if has_a and has_b:
                 if blend and abs(a - b) <= rel_tol * min(a, b):
-                    xa, ya, xb, yb = ua[v, u], va[v, u], ub[v, u], vb[v, u]
+                    p0, p1, p2, p3, pax, pay = _taps(sa, ua[v, u], va[v, u])
+                    q0, q1, q2, q3, qax, qay = _taps(sb, ub[v, u], vb[v, u])
                     for ch in range(nc):
-                        x = wa * _bilinear(sa, xa, ya, ch) + wb * _bilinear(sb, xb, yb, ch)
+                        x = wa * _lerp(sa, p0, p1, p2, p3, pax, pay, ch) + wb * _lerp(sb, q0, q1, q2, q3, qax, qay, ch)
                         _store(out, v, u, ch, x, is_int, maxval)
                     depth[v, u] = wa * a + wb * b
                 elif (not blend) or a <= b:
-                    for ch in range(nc):
-                        _store(out, v, u, ch, _bilinear(sa, ua[v, u], va[v, u], ch), is_int, maxval)
+                    _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
                     depth[v, u] = a
                 else:
-                    for ch in range(nc):
-                        _store(out, v, u, ch, _bilinear(sb, ub[v, u], vb[v, u], ch), is_int, maxval)
+                    _sample_store(sb, ub[v, u], vb[v, u], out, v, u, is_int, maxval)
                     depth[v, u] = b
                 coverage[v, u] = True
             elif has_a:
-                for ch in range(nc):
-                    _store(out, v, u, ch, _bilinear(sa, ua[v, u], va[v, u], ch), is_int, maxval)
+                _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = a
                 coverage[v, u] = True
             elif has_b:
-                for ch in range(nc):
-                    _store(out, v, u, ch, _bilinear(sb, ub[v, u], vb[v, u], ch), is_int, maxval)
+                _sample_store(sb, ub[v, u], vb[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = b
                 coverage[v, u] = True
             else:
