@@ -63,6 +63,7 @@ __all__ = [
     "split_rects",
     "tolerance_from_error_px",
     "zprime",
+    "zprime_per_inv_depth",
 ]
 
 METHODS = ("edge", "separate", "paper")
