@@ -490,38 +490,54 @@ def background_fill(color, depth, holes, rel_tol, max_dist, is_int, filled):
     1/distance, so disocclusions take background, never foreground, colors. ``filled`` (bool)
     marks the pixels written; holes with no candidate stay untouched."""
     h, w, nc = color.shape
-    # nearest non-hole column to the left / right of each pixel, per row
-    left = np.empty((h, w), np.int32)
-    right = np.empty((h, w), np.int32)
+    # nearest non-hole row above / below each hole pixel: row-major sweeps keeping the last
+    # non-hole row of every column (cache friendly; written only at hole pixels)
     up = np.empty((h, w), np.int32)
     down = np.empty((h, w), np.int32)
-    for v in prange(h):
-        last = -1
+    row_has = np.zeros(h, np.bool_)
+    last = np.full(w, -1, np.int32)
+    for v in range(h):
+        for u in range(w):
+            if holes[v, u]:
+                up[v, u] = last[u]
+                row_has[v] = True
+            else:
+                last[u] = v
+    last[:] = -1
+    for v in range(h - 1, -1, -1):
+        if not row_has[v]:
+            for u in range(w):
+                if not holes[v, u]:
+                    last[u] = v
+            continue
+        for u in range(w):
+            if holes[v, u]:
+                down[v, u] = last[u]
+            else:
+                last[u] = v
+    # nearest non-hole column left / right, per row that has holes
+    left = np.empty((h, w), np.int32)
+    right = np.empty((h, w), np.int32)
+    for v in range(h):
+        if not row_has[v]:
+            continue
+        lst = -1
         for u in range(w):
             if not holes[v, u]:
-                last = u
-            left[v, u] = last
-        last = -1
+                lst = u
+            left[v, u] = lst
+        lst = -1
         for u in range(w - 1, -1, -1):
             if not holes[v, u]:
-                last = u
-            right[v, u] = last
-    for u in prange(w):
-        last = -1
-        for v in range(h):
-            if not holes[v, u]:
-                last = v
-            up[v, u] = last
-        last = -1
-        for v in range(h - 1, -1, -1):
-            if not holes[v, u]:
-                last = v
-            down[v, u] = last
-    for v in prange(h):
-        cu = np.empty(4, np.int64)
-        cv = np.empty(4, np.int64)
-        cd = np.empty(4, np.float64)
-        cz = np.empty(4, np.float64)
+                lst = u
+            right[v, u] = lst
+    cu = np.empty(4, np.int64)
+    cv = np.empty(4, np.int64)
+    cd = np.empty(4, np.float64)
+    cz = np.empty(4, np.float64)
+    for v in range(h):
+        if not row_has[v]:
+            continue
         for u in range(w):
             if not holes[v, u]:
                 continue
@@ -596,8 +612,13 @@ def _taps(src, x, y):
 
 @njit(cache=True, inline="always")
 def _lerp(src, x0, x1, y0, y1, ax, ay, ch):
-    top = src[y0, x0, ch] + ax * (src[y0, x1, ch] - src[y0, x0, ch])
-    bot = src[y1, x0, ch] + ax * (src[y1, x1, ch] - src[y1, x0, ch])
+    """Bilinear interpolation in float32 (integer sources are converted exactly per tap)."""
+    p00 = np.float32(src[y0, x0, ch])
+    p01 = np.float32(src[y0, x1, ch])
+    p10 = np.float32(src[y1, x0, ch])
+    p11 = np.float32(src[y1, x1, ch])
+    top = p00 + ax * (p01 - p00)
+    bot = p10 + ax * (p11 - p10)
     return top + ay * (bot - top)
 
 
@@ -612,7 +633,8 @@ def _sample_store(src, x, y, out, v, u, is_int, maxval):
 def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
                       out, depth, coverage):
     """Fused bilinear sampling + two-layer composite (see composite2): layer colors are sampled
-    from the float32 sources sa, sb at the maps (ua, va), (ub, vb) only where they are used, so
+    (in float32) from the sources sa, sb (any dtype: uint8 sources are read as is, 4x less memory
+    traffic than a float32 copy, with identical results) at the maps (ua, va), (ub, vb) only where they are used, so
     no layer color image is ever written. ``single``: only layer a exists."""
     h, w, nc = out.shape
     for v in prange(h):

@@ -135,8 +135,9 @@ def sample_composite(
 
     Parameters
     ----------
-    sources : sequence of (H_s, W_s, C) float32 arrays
-        Source colors (one or two, same channel count).
+    sources : sequence of (H_s, W_s, C) arrays
+        Source colors (one or two, same channel count and dtype; uint8, uint16 or float). Values
+        are interpolated in float32 in the sources' own value scale.
     maps : sequence of SourceMaps
         Per layer: source coordinates (pixel centers at integers: 3.0 is column 3, 3.5 the mean of
         columns 3 and 4), target depth (NaN uncovered); all of the target size.
@@ -160,9 +161,9 @@ def sample_composite(
         raise ValueError(f"weights: expected {len(sources)} non-negative finite weights with a positive sum, got {weights!r}")
     w = w / w.sum()
     for i, s in enumerate(sources):
-        if s.dtype != np.float32 or s.ndim != 3 or s.shape[2] != sources[0].shape[2]:
-            raise ValueError(f"sources[{i}]: expected float32 (H, W, C) with C = {sources[0].shape[2]}, "
-                             f"got {s.dtype} {s.shape}")
+        if s.ndim != 3 or s.shape[2] != sources[0].shape[2] or s.dtype != sources[0].dtype:
+            raise ValueError(f"sources[{i}]: expected (H, W, C) with C = {sources[0].shape[2]} and dtype "
+                             f"{sources[0].dtype}, got {s.dtype} {s.shape}")
     dtype = np.dtype(dtype)
     is_int = dtype.kind in "ui"
     maxval = float(np.iinfo(dtype).max) if is_int else 0.0

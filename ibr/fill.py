@@ -100,11 +100,18 @@ def fill_background(color, depth, holes, *, depth_tol: float = 0.05, max_dist: i
         candidate (e.g. a whole empty row and column) stay as they were.
     """
     color, depth, holes = _check(color, depth, holes)
-    depth_tol = check_positive("depth_tol", depth_tol)
-    max_dist = np.iinfo(np.int64).max if max_dist is None else int(check_positive("max_dist", max_dist))
     out = np.ascontiguousarray(color).copy()
     z = np.ascontiguousarray(depth, dtype=np.float32).copy()
+    return out, z, _fill_background_inplace(out, z, holes, depth_tol=depth_tol, max_dist=max_dist)
+
+
+def _fill_background_inplace(color, depth, holes, *, depth_tol: float = 0.05, max_dist=None) -> np.ndarray:
+    """:func:`fill_background` writing into ``color`` (C-contiguous (H, W, C)) and ``depth``
+    (C-contiguous float32); returns ``filled``. Internal: callers own both arrays."""
+    depth_tol = check_positive("depth_tol", depth_tol)
+    max_dist = np.iinfo(np.int64).max if max_dist is None else int(check_positive("max_dist", max_dist))
     filled = np.zeros(holes.shape, np.bool_)
     if holes.any():
-        _k.background_fill(out, z, np.ascontiguousarray(holes), depth_tol, max_dist, out.dtype.kind in "ui", filled)
-    return out, z, filled
+        _k.background_fill(color, depth, np.ascontiguousarray(holes), depth_tol, max_dist,
+                           color.dtype.kind in "ui", filled)
+    return filled

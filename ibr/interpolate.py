@@ -26,7 +26,7 @@ import numpy as np
 from ._validate import check_choice, check_finite_scalar, check_positive
 from .camera import Camera, interpolate_cameras
 from .composite import COMPOSITE_MODES, composite, sample_composite, viewpoint_weights
-from .fill import FILLS, fill_background, fill_previous
+from .fill import FILLS, _fill_background_inplace
 from .render import FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_into, as_float_color, sample_maps, scratch, scratch_maps
 from .view import View
 
@@ -89,7 +89,8 @@ class Rendering:
 # ------------------------------------------------------------------------- source cache
 @dataclass(frozen=True, eq=False)
 class _Source:
-    color: np.ndarray  # (H, W, C) float32, source value scale
+    color: np.ndarray  # (H, W, C) float32, source value scale (for cv2.remap)
+    raw: np.ndarray  # (H, W, C) contiguous, the source's own dtype (for the fused numba sampler)
     meshes: dict
 
 
@@ -101,7 +102,8 @@ def _source(view: View) -> _Source:
     if src is None:
         col = as_float_color(view.color)
         col.setflags(write=False)
-        src = _Source(col, {})
+        raw = np.ascontiguousarray(view.color if view.color.ndim == 3 else view.color[..., None])
+        src = _Source(col, raw, {})
         _sources[view] = src
     return src
 
@@ -152,9 +154,10 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
     maps = [_maps(v, camera, method, footprint, splat, mesh_options, slot) for v, slot in zip(views, "ab")]
     if not any(m.coverage.any() for m in maps):
         return None
-    colors = [_source(v).color for v in views]
     if interpolation == "linear":  # fused numba pass (no layer images, no OpenCV thread pool)
-        return sample_composite(colors, maps, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype)
+        raw = [_source(v).raw for v in views]
+        return sample_composite(raw, maps, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype)
+    colors = [_source(v).color for v in views]
     layers = []
     for m, c, slot in zip(maps, colors, "ab"):
         buf = scratch((slot, "color"), (*camera.shape, c.shape[2]), np.float32)
@@ -168,10 +171,12 @@ def _finish(comp, camera, t, fill, previous, out_2d) -> Rendering:
     color, depth = comp.color, comp.depth
     filled = np.zeros_like(holes)
     if holes.any():
-        if fill == "previous" and previous is not None:
-            color, depth, filled = fill_previous(color, depth, holes, previous.color.reshape(color.shape), previous.depth)
+        if fill == "previous" and previous is not None:  # seed step 7; only hole pixels change
+            color[holes] = previous.color.reshape(color.shape)[holes]
+            depth[holes] = previous.depth[holes]
+            filled = holes.copy()
         elif fill in ("previous", "inpaint"):
-            color, depth, filled = fill_background(color, depth, holes)
+            filled = _fill_background_inplace(color, depth, holes)
     if out_2d:
         color = color[..., 0]
     return Rendering(color, depth, holes, filled, camera, t)
