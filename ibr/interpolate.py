@@ -87,11 +87,22 @@ class Rendering:
 
 
 # ------------------------------------------------------------------------- source cache
-@dataclass(frozen=True, eq=False)
 class _Source:
-    color: np.ndarray  # (H, W, C) float32, source value scale (for cv2.remap)
-    raw: np.ndarray  # (H, W, C) contiguous, the source's own dtype (for the fused numba sampler)
-    meshes: dict
+    """Per-view cache: the color as the numba sampler reads it, a float32 copy for ``cv2.remap``
+    (made on first use), and the meshes by option set."""
+
+    def __init__(self, view: View):
+        self.raw = np.ascontiguousarray(view.color if view.color.ndim == 3 else view.color[..., None])
+        self._color = None
+        self.meshes: dict = {}
+
+    @property
+    def color(self) -> np.ndarray:
+        """(H, W, C) float32 in the source's value scale."""
+        if self._color is None:
+            self._color = as_float_color(self.raw)
+            self._color.setflags(write=False)
+        return self._color
 
 
 _sources: "weakref.WeakKeyDictionary[View, _Source]" = weakref.WeakKeyDictionary()
@@ -100,11 +111,7 @@ _sources: "weakref.WeakKeyDictionary[View, _Source]" = weakref.WeakKeyDictionary
 def _source(view: View) -> _Source:
     src = _sources.get(view)
     if src is None:
-        col = as_float_color(view.color)
-        col.setflags(write=False)
-        raw = np.ascontiguousarray(view.color if view.color.ndim == 3 else view.color[..., None])
-        src = _Source(col, raw, {})
-        _sources[view] = src
+        src = _sources[view] = _Source(view)
     return src
 
 
