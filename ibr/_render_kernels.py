@@ -30,11 +30,14 @@ from numba import njit, prange
 
 __all__: list[str] = []
 
+# Every kernel uses error_model="numpy": a division by zero gives inf/NaN (which the kernels
+# test for) instead of numba's default Python-style check and exception on every division.
+
 # Layout of the per-quad coefficient rows computed by setup_quads (12 float64 per quad).
 _G, _HX, _HY, _HZ = 0, 3, 6, 9
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _corner_tgt(uc, vc, a, b, c, ifx, ify, cx, cy, r, t):
     """Target-frame point of the source pixel-edge corner (uc, vc) on the plane 1/z = a u + b v + c
     (ifx, ify: reciprocal source focal lengths)."""
@@ -52,7 +55,7 @@ def _corner_tgt(uc, vc, a, b, c, ifx, ify, cx, cy, r, t):
     return x, y, z, True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _grow(x, y, z, kt, lim, umin, umax, vmin, vmax):
     iz = 1.0 / z
     uu = min(max(kt[0] * x * iz + kt[2], -lim), lim)
@@ -60,7 +63,7 @@ def _grow(x, y, z, kt, lim, umin, umax, vmin, vmax):
     return min(umin, uu), max(umax, uu), min(vmin, vv), max(vmax, vv)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _clip_edge(xa, ya, za, xb, yb, zb, eps, kt, lim, umin, umax, vmin, vmax):
     """Grow the projected bounding box by edge a->b clipped to z > eps (Sutherland-Hodgman:
     the start vertex if in front, plus the crossing point with z = eps)."""
@@ -149,11 +152,11 @@ def _setup_quads(rects, planes, ks, r, t, kt_inv, kt, width, height, coef, bbox)
         bbox[q, 3] = vhi
 
 
-setup_quads = njit(cache=True, parallel=True)(_setup_quads)
-setup_quads_serial = njit(cache=True)(_setup_quads)
+setup_quads = njit(cache=True, error_model="numpy", parallel=True)(_setup_quads)
+setup_quads_serial = njit(cache=True, error_model="numpy")(_setup_quads)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _span(e0, e1, e2, v, strict, lo, hi):
     """Narrow the integer range [lo, hi] to u with e0*u + e1*v + e2 (>= 0 or > 0 if strict),
     conservatively (one pixel of slack; the exact test is per pixel)."""
@@ -174,7 +177,7 @@ def _span(e0, e1, e2, v, strict, lo, hi):
     return lo, hi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def bucket_bands(bbox, height, nbands):
     """Counting sort of visible quads into horizontal bands of target rows.
 
@@ -302,18 +305,18 @@ def _raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quad
                     map_v[v, u] = far_coord
 
 
-raster_quads = njit(cache=True, parallel=True)(_raster_quads)
-raster_quads_serial = njit(cache=True)(_raster_quads)
+raster_quads = njit(cache=True, error_model="numpy", parallel=True)(_raster_quads)
+raster_quads_serial = njit(cache=True, error_model="numpy")(_raster_quads)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _off_plane(inv, uu, vv, a, b, c, rel_tol):
     p = a * uu + b * vv + c
     q = inv[vv, uu]
     return not (q > 0.0) or abs(q - p) > rel_tol * abs(p)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def clamp_flags(rects, planes, inv, rel_tol, out):
     """Per quad and side [left, top, right, bottom]: 1 when any source pixel just outside that
     side is outside the image, has no depth (``inv <= 0``), or has an inverse depth ``inv`` off
@@ -348,7 +351,7 @@ def clamp_flags(rects, planes, inv, rel_tol, out):
 
 
 # ------------------------------------------------------------------------- forward warp
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_pixels(depth, ks, r, t, kt, tu, tv, tz):
     """Per source pixel: target pixel position (tu, tv) and planar target depth tz
     (NaN where the source depth is invalid or the point is behind the target camera).
@@ -376,7 +379,7 @@ def project_pixels(depth, ks, r, t, kt, tu, tv, tz):
             tz[v, u] = Z
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def splat(tu, tv, tz, inverse, zbuf, map_u, map_v):
     """Round-to-nearest z-buffered splat (seed 003 method 2). zbuf (H, W) float64 = +inf.
 
@@ -407,7 +410,7 @@ def splat(tu, tv, tz, inverse, zbuf, map_u, map_v):
                     map_v[iv, iu] = v
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def finish_splat(zbuf, map_u, map_v, depth, coverage, far_coord):
     h, w = zbuf.shape
     for v in prange(h):
@@ -424,7 +427,7 @@ def finish_splat(zbuf, map_u, map_v, depth, coverage, far_coord):
 
 
 # ------------------------------------------------------------------------- compositing
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _store(out, v, u, ch, x, is_int, maxval):
     if is_int:  # round half up and clip: truncation of x + 0.5 clipped to [0, maxval + 0.5)
         out[v, u, ch] = min(max(x + 0.5, 0.0), maxval)
@@ -432,7 +435,7 @@ def _store(out, v, u, ch, x, is_int, maxval):
         out[v, u, ch] = x
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True)
 def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, depth, coverage):
     """Two-layer composite (seed 002 section 2.2 step (1) and the depth-aware blend).
 
@@ -480,7 +483,7 @@ def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, dept
 
 
 # ------------------------------------------------------------------------- hole filling
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def background_fill(color, depth, holes, rel_tol, max_dist, is_int, filled):
     """Fill hole pixels from the *farther* of their nearest non-hole neighbours (in place).
 
@@ -597,7 +600,7 @@ def background_fill(color, depth, holes, rel_tol, max_dist, is_int, filled):
             filled[v, u] = True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _taps(src, x, y):
     """Bilinear taps of src (H, W, C) at pixel coordinates (x, y) (centers at integers); taps
     outside the image are clamped to the border pixels."""
@@ -610,7 +613,7 @@ def _taps(src, x, y):
             min(max(iy + 1, 0), h - 1), np.float32(x - fx0), np.float32(y - fy0))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _lerp(src, x0, x1, y0, y1, ax, ay, ch):
     """Bilinear interpolation in float32 (integer sources are converted exactly per tap)."""
     p00 = np.float32(src[y0, x0, ch])
@@ -622,14 +625,14 @@ def _lerp(src, x0, x1, y0, y1, ax, ay, ch):
     return top + ay * (bot - top)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _sample_store(src, x, y, out, v, u, is_int, maxval):
     x0, x1, y0, y1, ax, ay = _taps(src, x, y)
     for ch in range(out.shape[2]):
         _store(out, v, u, ch, _lerp(src, x0, x1, y0, y1, ax, ay, ch), is_int, maxval)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True)
 def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
                       out, depth, coverage):
     """Fused bilinear sampling + two-layer composite (see composite2): layer colors are sampled
