@@ -195,7 +195,7 @@ def run(args) -> int:
     times, colors, labels, scores = [], [], [], []
     ext = "." + args.format
     t_prev = time.perf_counter()
-    for i, (t, frame) in enumerate(zip(ts, frames_iter)):
+    for i, (frame, t) in enumerate(zip(frames_iter, ts)):  # frames first: the bar draws its last step
         dt = time.perf_counter() - t_prev
         times.append(dt)
         name = f"frame_{i:03d}_t{t:.3f}"

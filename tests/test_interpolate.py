@@ -219,3 +219,18 @@ def test_cli_errors(tmp_path, capsys):
     assert cli.main(["interpolate", "--fill", "blur"]) == 2
     assert cli.main(["warp", str(tmp_path / "missing.json"), "--to", "x.json", "-o", "o.png"]) == 1
     assert not (Path.cwd() / "o.png").exists()
+
+
+def test_cli_bench_lists_topics_and_rejects_unknown(capsys):
+    assert cli.main(["bench", "list"]) == 0
+    assert "render" in capsys.readouterr().out.split()
+    assert cli.main(["bench", "nosuchtopic"]) == 1
+    assert "topic: expected one of" in capsys.readouterr().err
+
+
+def test_cli_long_run_progress(tmp_path, capsys):
+    code = cli.main(["interpolate", "--frames", "11", "--out", str(tmp_path), "--method", "forward", "--fill", "none"])
+    assert code == 0
+    err = capsys.readouterr().err
+    assert "interpolate 11/11" in err and "ground truth: mean PSNR" in err
+    assert len(list(tmp_path.glob("frame_*.png"))) == 11
