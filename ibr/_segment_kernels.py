@@ -58,28 +58,48 @@ def valid_range(z):
     return los.min(), his.max(), n
 
 
-@njit(cache=True)
 def inv_depth_range(z):
     """(q, zmin, zmax, count): q = 1/z as float64 (NaN where z is not finite or <= 0) and the
-    range and count of the valid depth, in one pass. (nan, nan, 0) range when nothing is valid."""
-    h, w = z.shape
-    q = np.empty((h, w), np.float64)
-    lo = np.inf
-    hi = -np.inf
-    n = 0
-    for v in range(h):
-        for u in range(w):
-            x = np.float64(z[v, u])
-            if x > 0 and x < np.inf:  # False for NaN
-                q[v, u] = 1.0 / x
-                n += 1
-                lo = min(lo, x)
-                hi = max(hi, x)
-            else:
-                q[v, u] = np.nan
+    range and count of the valid depth, in one pass. (nan, nan, 0) range when nothing is valid.
+
+    ``z`` is C-contiguous float32 or float64. The range is taken on the bit patterns of the
+    valid values (positive finite floats order like their bits as integers), which lets the
+    loop vectorize; the result is the same float.
+    """
+    ibits = np.int32 if z.dtype == np.float32 else np.int64
+    q = np.empty(z.shape, np.float64)
+    big = ibits(np.iinfo(ibits).max)
+    lo, hi, n = _inv_depth_bits(z, z.view(ibits), q, big)
     if n == 0:
         return q, np.nan, np.nan, 0
-    return q, lo, hi, n
+    as_float = np.empty(2, ibits)
+    as_float[0], as_float[1] = lo, hi
+    lo_z, hi_z = as_float.view(z.dtype)
+    return q, float(lo_z), float(hi_z), int(n)
+
+
+@njit(cache=True)
+def _inv_depth_bits(z, bits, q, big):
+    """Fill ``q`` = 1/z (NaN where invalid); return (min, max) of the valid ``bits`` (``bits``
+    is ``z`` viewed as integers) and the valid count. Branch-free loop."""
+    h, w = z.shape
+    zero = big - big
+    lo = big
+    hi = zero
+    n = 0
+    for v in range(h):
+        zr = z[v]
+        br = bits[v]
+        qr = q[v]
+        for u in range(w):
+            x = np.float64(zr[u])
+            ok = (x > 0) & (x < np.inf)  # False for NaN
+            qr[u] = 1.0 / x if ok else np.nan
+            b = br[u]
+            lo = min(lo, b if ok else big)
+            hi = max(hi, b if ok else zero)
+            n += ok
+    return lo, hi, n
 
 
 # ------------------------------------------------------------------ per-pixel measures
@@ -365,34 +385,56 @@ def split_pixels(bad, invalid, min_band, first_dir):
 # ------------------------------------------------------------------ plane fit
 
 
-@njit(cache=True)
-def rect_fit_max_residual(zp, u0, v0, u1, v1, limit):
-    """Max |residual| of the least-squares plane of ``zp`` over a full rect (all finite).
+@njit(cache=True, fastmath={"reassoc"})
+def _rect_moments(zp, u0, v0, u1, v1):
+    """(S(z), S(z du), S(z dv)) over a full rect, du = u - uc and dv = v - vc about its center.
 
-    Over a full rectangle the normal equations decouple in centered coordinates:
-    ``a = S(z du) / S(du^2)``, ``b = S(z dv) / S(dv^2)``, ``c = mean(z)``. Stops early (returning
-    a value > ``limit``) as soon as a residual exceeds ``limit``.
+    The only kernel with re-associated (SIMD) sums; every plane fit of the split and of the mesh
+    goes through it, so the plane the split verified is the plane the mesh stores.
     """
-    w = u1 - u0
-    h = v1 - v0
     uc = 0.5 * (u0 + u1 - 1)
     vc = 0.5 * (v0 + v1 - 1)
     s = 0.0
     su = 0.0
     sv = 0.0
     for v in range(v0, v1):
-        dv = v - vc
+        row = zp[v]
+        rs = 0.0
+        rsu = 0.0
         for u in range(u0, u1):
-            z = zp[v, u]
-            s += z
-            su += z * (u - uc)
-            sv += z * dv
-    n = w * h
-    c = s / n
-    suu = h * w * (w * w - 1) / 12.0
-    svv = w * h * (h * h - 1) / 12.0
-    a = su / suu if w > 1 else 0.0
-    b = sv / svv if h > 1 else 0.0
+            z = row[u]
+            rs += z
+            rsu += z * (u - uc)
+        s += rs
+        su += rsu
+        sv += rs * (v - vc)
+    return s, su, sv
+
+
+@njit(cache=True, inline="always")
+def _rect_plane(zp, u0, v0, u1, v1):
+    """Centered least-squares plane (a, b, c, uc, vc): z ~ c + a (u - uc) + b (v - vc).
+
+    Over a full rectangle the normal equations decouple in centered coordinates:
+    ``a = S(z du) / S(du^2)``, ``b = S(z dv) / S(dv^2)``, ``c = mean(z)``; a one-pixel-thick rect
+    gets a zero slope across its thickness.
+    """
+    w = u1 - u0
+    h = v1 - v0
+    s, su, sv = _rect_moments(zp, u0, v0, u1, v1)
+    c = s / (w * h)
+    a = su / (h * w * (w * w - 1) / 12.0) if w > 1 else 0.0
+    b = sv / (w * h * (h * h - 1) / 12.0) if h > 1 else 0.0
+    return a, b, c, 0.5 * (u0 + u1 - 1), 0.5 * (v0 + v1 - 1)
+
+
+@njit(cache=True)
+def rect_fit_max_residual(zp, u0, v0, u1, v1, limit):
+    """Max |residual| of the least-squares plane of ``zp`` over a full rect (all finite).
+
+    Stops early (returning a value > ``limit``) as soon as a residual exceeds ``limit``.
+    """
+    a, b, c, uc, vc = _rect_plane(zp, u0, v0, u1, v1)
     m = 0.0
     for v in range(v0, v1):
         base = c + b * (v - vc)
@@ -406,36 +448,47 @@ def rect_fit_max_residual(zp, u0, v0, u1, v1, limit):
 
 
 @njit(cache=True)
+def _row_exceeds(row, u0, u1, base, a, uc, limit):
+    """Number of pixels u0..u1-1 of ``row`` whose residual against ``base + a (u - uc)`` exceeds
+    ``limit`` (a branch-free count, so that the loop vectorizes)."""
+    n = 0
+    for u in range(u0, u1):
+        n += abs(row[u] - (base + a * (u - uc))) > limit
+    return n
+
+
+@njit(cache=True)
+def rect_fit_within(zp, u0, v0, u1, v1, limit):
+    """True when every |residual| of the least-squares plane over a full rect is <= ``limit``.
+
+    Same plane and residuals as :func:`rect_fit_max_residual` (``<= limit`` there iff True
+    here). The first and last rows are checked first (a crease or bend near the rect's edge
+    shows there), then the others; the check stops at the first row holding a residual over
+    ``limit``.
+    """
+    a, b, c, uc, vc = _rect_plane(zp, u0, v0, u1, v1)
+    if _row_exceeds(zp[v0], u0, u1, c + b * (v0 - vc), a, uc, limit):
+        return False
+    if v1 - 1 > v0 and _row_exceeds(zp[v1 - 1], u0, u1, c + b * (v1 - 1 - vc), a, uc, limit):
+        return False
+    for v in range(v0 + 1, v1 - 1):
+        if _row_exceeds(zp[v], u0, u1, c + b * (v - vc), a, uc, limit):
+            return False
+    return True
+
+
+@njit(cache=True)
 def fit_planes_inv_depth(q, rects):
     """(Q, 3) least-squares planes ``q(u, v) = a u + b v + c`` over each rect (absolute coords).
 
     A one-pixel rect gets a = b = 0, c = q(center); a one-pixel-thick rect gets a zero slope
-    across its thickness. Rects must hold finite values only.
+    across its thickness. Rects must hold finite values only. Same fit as the split's
+    (:func:`rect_fit_within`), so the tolerance the split verified holds for these planes.
     """
     nq = rects.shape[0]
     out = np.empty((nq, 3), np.float64)
     for i in range(nq):
-        u0 = rects[i, 0]
-        v0 = rects[i, 1]
-        u1 = rects[i, 2]
-        v1 = rects[i, 3]
-        w = u1 - u0
-        h = v1 - v0
-        uc = 0.5 * (u0 + u1 - 1)
-        vc = 0.5 * (v0 + v1 - 1)
-        s = 0.0
-        su = 0.0
-        sv = 0.0
-        for v in range(v0, v1):
-            dv = v - vc
-            for u in range(u0, u1):
-                z = q[v, u]
-                s += z
-                su += z * (u - uc)
-                sv += z * dv
-        c = s / (w * h)
-        a = su / (h * w * (w * w - 1) / 12.0) if w > 1 else 0.0
-        b = sv / (w * h * (h * h - 1) / 12.0) if h > 1 else 0.0
+        a, b, c, uc, vc = _rect_plane(q, rects[i, 0], rects[i, 1], rects[i, 2], rects[i, 3])
         out[i, 0] = a
         out[i, 1] = b
         out[i, 2] = c - a * uc - b * vc
@@ -456,83 +509,100 @@ def label_rects(rects, h, w):
 # ------------------------------------------------------------------ binary split (edge-aware)
 
 
-def edge_prefix(zp, thr):
-    """Prefix sums of the break edges of :func:`edge_breaks` (single-threaded: on a shared
-    2-core machine numba's parallel kernels measured slower than serial ones).
+#: Vertical break flags are buffered for this many consecutive rows, then written to the
+#: transposed row prefix sums ``rv`` a cache line at a time.
+_RV_BLOCK = 32
 
-    Returns ``ch`` (H+1, W-1) int32 with ``ch[v, u] = sum(hb[:v, u])`` (breaks across the vertical
-    grid line between columns u and u+1, rows above v) and ``rv`` (W+1, H-1) int32 with
+
+def edge_prefix(zp, thr):
+    """Prefix sums of the break edges of :func:`edge_breaks`, in one fused pass over ``zp``
+    (single-threaded: on a shared 2-core machine numba's parallel kernels measured slower than
+    serial ones).
+
+    Returns ``ch`` (H+1, W-1) with ``ch[v, u] = sum(hb[:v, u])`` (breaks across the vertical grid
+    line between columns u and u+1, rows above v) and ``rv`` (W+1, H-1) with
     ``rv[u, v] = sum(vb[v, :u])`` (stored transposed so a scan over rows reads contiguous memory).
+    Both are int16 when the image is at most 32767 pixels on each side (a count never exceeds
+    the side), else int32: half the memory traffic for the split's line scans.
     """
-    return _colcum_breaks(zp, thr), _rowcum_t(_vertical_breaks(zp, thr))
+    h, w = zp.shape
+    dt = np.int16 if max(h, w) <= 32767 else np.int32
+    ch = np.empty((h + 1, max(w - 1, 0)), dt)
+    rv = np.empty((w + 1, max(h - 1, 0)), dt)
+    ch[0] = 0  # here rather than in the kernel: zeroing loops there stopped its row loops from
+    rv[0] = 0  # vectorizing (measured 1.5x slower)
+    _edge_prefix_kernel(zp, thr, ch, rv)
+    return ch, rv
 
 
 @njit(cache=True, inline="always")
 def _stencil_state(a, c, b, thr):
-    """Centered second difference a - 2c + b: 0 unavailable (a NaN sample), 1 straight, 2 bent."""
-    if a == a and c == c and b == b:
-        return 2 if abs(a - 2.0 * c + b) > thr else 1
-    return 0
+    """Centered second difference a - 2c + b: 0 unavailable (a NaN sample), 1 straight, 2 bent.
+    Branch-free so that the loops over a row vectorize."""
+    avail = (a == a) & (c == c) & (b == b)
+    bent = abs(a - 2.0 * c + b) > thr
+    return np.uint8(avail) * (np.uint8(1) + np.uint8(bent))
 
 
 @njit(cache=True, inline="always")
 def _flag(sm1, s0, s1, fa, fb):
     """Break flag of pair (i, i+1) from the stencil states at i-1, i, i+1 and the validity of
     samples i and i+1 (same rule as :func:`_pair_break`: the one-sided stencil at i is the
-    centered one at i-1)."""
-    if fa != fb:
-        return 1
-    if not fa:
-        return 0
-    if (s0 == 2 or s1 == 2) and s0 != 1 and s1 != 1:
-        return 1
-    if s0 == 2 and s1 == 1 and sm1 == 1:
-        return 1
-    return 0
+    centered one at i-1). Branch-free."""
+    st0 = s0 == 1
+    st1 = s1 == 1
+    bt0 = s0 == 2
+    bt1 = s1 == 2
+    straddle = (bt0 | bt1) & ~st0 & ~st1  # every stencil straddling the pair is bent
+    crease = bt0 & st1 & (sm1 == 1)  # crease exactly at i
+    return np.uint8((fa != fb) | (fa & fb & (straddle | crease)))
 
 
 @njit(cache=True)
-def _colcum_breaks(zp, thr):
-    """Column prefix sums (H+1, W-1) of the horizontal-neighbor break flags, in one pass."""
+def _edge_prefix_kernel(zp, thr, ch, rv):
+    """Fill rows 1.. of ``ch`` and ``rv`` of :func:`edge_prefix` (row 0 must be zero already):
+    row by row, stencil states, break flags, prefix sums."""
     h, w = zp.shape
-    ch = np.empty((h + 1, max(w - 1, 0)), np.int32)
-    st = np.zeros(w + 1, np.int8)  # st[u] = state at u; st[w] stays 0
-    for u in range(w - 1):
-        ch[0, u] = 0
+    blk = _RV_BLOCK
+    hs = np.zeros(w + 2, np.uint8)  # hs[u + 1] = horizontal state at u (0 at u = 0, w - 1, outside)
+    vs0 = np.zeros(w, np.uint8)  # vertical states at rows v - 1, v, v + 1
+    vs1 = np.zeros(w, np.uint8)
+    vs2 = np.zeros(w, np.uint8)
+    vflags = np.zeros((w, blk), np.uint8)  # vflags[u, j]: flag of pair rows (v0 + j, v0 + j + 1)
+    acc = np.zeros(blk, np.int32)
     for v in range(h):
+        row = zp[v]
         for u in range(1, w - 1):
-            st[u] = _stencil_state(zp[v, u - 1], zp[v, u], zp[v, u + 1], thr)
-        prev = 0
+            hs[u + 1] = _stencil_state(row[u - 1], row[u], row[u + 1], thr)
         for u in range(w - 1):
-            a = zp[v, u]
-            b = zp[v, u + 1]
-            ch[v + 1, u] = ch[v, u] + _flag(prev, st[u], st[u + 1], a == a, b == b)
-            prev = st[u]
-    return ch
-
-
-@njit(cache=True)
-def _vertical_breaks(zp, thr):
-    """(H-1, W) uint8 vertical-neighbor break flags (``vb`` of :func:`edge_breaks`)."""
-    h, w = zp.shape
-    vb = np.empty((max(h - 1, 0), w), np.uint8)
-    if h < 2:
-        return vb
-    s_prev = np.zeros(w, np.int8)  # states at row v - 1
-    s_cur = np.zeros(w, np.int8)  # row v (0 for v = 0)
-    s_next = np.zeros(w, np.int8)  # row v + 1
-    for v in range(h - 1):
+            a = row[u]
+            b = row[u + 1]
+            ch[v + 1, u] = ch[v, u] + _flag(hs[u], hs[u + 1], hs[u + 2], a == a, b == b)
+        if v + 1 >= h:
+            break
+        nxt = zp[v + 1]
         if v + 2 < h:
+            nn = zp[v + 2]
             for u in range(w):
-                s_next[u] = _stencil_state(zp[v, u], zp[v + 1, u], zp[v + 2, u], thr)
+                vs2[u] = _stencil_state(row[u], nxt[u], nn[u], thr)
         else:
-            s_next[:] = 0
+            vs2[:] = 0
+        j = v % blk
         for u in range(w):
-            a = zp[v, u]
-            b = zp[v + 1, u]
-            vb[v, u] = _flag(s_prev[u], s_cur[u], s_next[u], a == a, b == b)
-        s_prev, s_cur, s_next = s_cur, s_next, s_prev
-    return vb
+            a = row[u]
+            b = nxt[u]
+            vflags[u, j] = _flag(vs0[u], vs1[u], vs2[u], a == a, b == b)
+        vs0, vs1, vs2 = vs1, vs2, vs0
+        if j == blk - 1 or v == h - 2:  # row prefix sums of the buffered rows, stored transposed
+            first = v - j
+            nb = j + 1
+            acc[:] = 0
+            for u in range(w):
+                out = rv[u + 1, first : first + nb]
+                fl = vflags[u]
+                for k in range(nb):
+                    acc[k] += fl[k]
+                    out[k] = acc[k]
 
 
 @njit(cache=True)
@@ -570,6 +640,14 @@ def _quick_reject(zp, u0, v0, u1, v1, tol):
 
 
 @njit(cache=True)
+def _add_abs_second_diff(acc, line, n):
+    """acc[i] += |line[i-1] - 2 line[i] + line[i+1]| for i = 1..n-2 (a separate kernel on 1-D
+    views, so that the loop vectorizes)."""
+    for i in range(1, n - 1):
+        acc[i] += abs(line[i - 1] - 2.0 * line[i] + line[i + 1])
+
+
+@njit(cache=True)
 def crease_split(zp, u0, v0, u1, v1, peak):
     """Where to split a break-free rect whose plane fit failed: ``(direction, line)``.
 
@@ -593,8 +671,7 @@ def crease_split(zp, u0, v0, u1, v1, peak):
     if w >= 3:
         acc = np.zeros(w, np.float64)
         for v in range(v0, v1, sv):
-            for c in range(u0 + 1, u1 - 1):
-                acc[c - u0] += abs(zp[v, c - 1] - 2.0 * zp[v, c] + zp[v, c + 1])
+            _add_abs_second_diff(acc, zp[v, u0:u1], w)
         for c in range(u0 + 1, u1 - 1):
             m = acc[c - u0] / nsv
             tot_u += m
@@ -608,11 +685,22 @@ def crease_split(zp, u0, v0, u1, v1, peak):
     tot_v = 0.0
     if h >= 3:
         acc = np.zeros(h, np.float64)
+        # the sampled pixels of rows r - 1, r, r + 1 in three rolling buffers: each row read once
+        ra = np.empty(nsu, np.float64)
+        rb = np.empty(nsu, np.float64)
+        rc = np.empty(nsu, np.float64)
+        for i in range(nsu):
+            ra[i] = zp[v0, u0 + i * su]
+            rb[i] = zp[v0 + 1, u0 + i * su]
         for r in range(v0 + 1, v1 - 1):
+            nxt = zp[r + 1]
             s = 0.0
-            for u in range(u0, u1, su):
-                s += abs(zp[r - 1, u] - 2.0 * zp[r, u] + zp[r + 1, u])
+            for i in range(nsu):
+                x = nxt[u0 + i * su]
+                rc[i] = x
+                s += abs(ra[i] - 2.0 * rb[i] + x)
             acc[r - v0] = s
+            ra, rb, rc = rb, rc, ra
         for r in range(v0 + 1, v1 - 1):
             m = acc[r - v0] / nsu
             tot_v += m
@@ -701,8 +789,7 @@ def split_edges(zp, ch, rv, tol, first_dir, peak):
                 continue  # break-free and invalid: the whole region is invalid
             area = (u1 - u0) * (v1 - v0)
             if area == 1 or (
-                not _quick_reject(zp, u0, v0, u1, v1, tol)
-                and rect_fit_max_residual(zp, u0, v0, u1, v1, tol) <= tol
+                not _quick_reject(zp, u0, v0, u1, v1, tol) and rect_fit_within(zp, u0, v0, u1, v1, tol)
             ):
                 out[n, 0] = u0
                 out[n, 1] = v0

@@ -280,3 +280,110 @@ def test_segment_on_inverse_depth_equals_split_on_zprime(method):
         assert (seg.near, seg.far) == (n, f)
         np.testing.assert_allclose(seg.zprime, zp, rtol=1e-12, atol=1e-5)
         assert seg.rects.tolist() == S.split_rects(zp, method=method, threshold=2.0**16).tolist()
+
+
+# ------------------------------------------------------------------ fast kernels vs references
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_inv_depth_range_matches_numpy(dtype):
+    """1/z, valid range and count (taken on integer bit patterns in the kernel) equal numpy's."""
+    rng = np.random.default_rng(7)
+    z = rng.uniform(0.5, 40.0, (13, 17))
+    specials = [np.nan, np.inf, -np.inf, 0.0, -0.0, -3.0, 1e-40 if dtype == np.float32 else 1e-310]
+    for i, s in enumerate(specials):
+        z[i, (3 * i) % 17] = s
+    z = z.astype(dtype)
+    q, lo, hi, n = K.inv_depth_range(z)
+    z64 = z.astype(np.float64)
+    valid = np.isfinite(z64) & (z64 > 0)
+    with np.errstate(divide="ignore", over="ignore"):
+        ref = np.where(valid, 1.0 / z64, np.nan)  # 1/1e-310 overflows to inf, as in the kernel
+    assert q.dtype == np.float64 and np.array_equal(q, ref, equal_nan=True)
+    assert (lo, hi, n) == (z64[valid].min(), z64[valid].max(), valid.sum())
+    assert type(lo) is float and type(n) is int
+    q, lo, hi, n = K.inv_depth_range(np.full((2, 3), np.nan, dtype))
+    assert np.isnan(q).all() and np.isnan(lo) and np.isnan(hi) and n == 0
+
+
+@pytest.mark.parametrize("shape", [(70, 9), (33, 40), (64, 5), (2, 2), (1, 6), (6, 1)])
+def test_edge_prefix_row_blocks_match_pairwise_kernel(shape):
+    """The fused prefix kernel buffers vertical flags in blocks of rows; heights around and over
+    the block size, with NaN and inf samples, give the prefix sums of the per-pair kernel."""
+    rng = np.random.default_rng(shape[0] * 100 + shape[1])
+    zp = rng.normal(0, 1, shape).cumsum(0).cumsum(1)
+    zp[rng.random(shape) < 0.1] = np.nan
+    zp[rng.random(shape) < 0.03] = np.inf
+    for thr in (0.5, 3.0):
+        hb, vb = K.edge_breaks(zp, thr)
+        ch, rv = K.edge_prefix(zp, thr)
+        assert ch.dtype == rv.dtype == np.int16
+        assert np.array_equal(ch[1:], np.cumsum(hb, axis=0)) and not ch[0].any()
+        assert np.array_equal(rv[1:], np.cumsum(vb, axis=1).T) and not rv[0].any()
+
+
+def test_edge_prefix_wide_image_uses_int32():
+    zp = np.sin(np.arange(32768.0) / 50.0)[None, :] * 100.0
+    ch, rv = K.edge_prefix(zp, 1e-3)
+    hb, _ = S.break_edges(zp, 1e-3)
+    assert ch.dtype == np.int32 and rv.shape == (32769, 0)
+    assert np.array_equal(ch[1], hb[0]) and hb.sum() > 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_rect_fit_within_and_planes_match_lstsq(seed):
+    """The split's fit test (SIMD moments, row-wise residual count) decides like the lstsq
+    reference at 1 +- 1e-6 of the reference's max residual, and the mesh's planes are lstsq's."""
+    zp, _, _ = S.zprime(piecewise_scene(seed, h=31, w=37))
+    zp = np.ascontiguousarray(np.where(np.isfinite(zp), zp, 0.0))
+    rng = np.random.default_rng(seed)
+    rects = []
+    for _ in range(40):
+        u0, v0 = rng.integers(0, 36), rng.integers(0, 30)
+        rects.append((u0, v0, rng.integers(u0 + 1, 38), rng.integers(v0 + 1, 32)))
+    for u0, v0, u1, v1 in rects:
+        ref = S._fit_max_residual_reference(zp, u0, v0, u1, v1)
+        if ref > 1e-3:
+            assert K.rect_fit_within(zp, u0, v0, u1, v1, ref * (1 + 1e-6))
+            assert not K.rect_fit_within(zp, u0, v0, u1, v1, ref * (1 - 1e-6))
+        assert K.rect_fit_max_residual(zp, u0, v0, u1, v1, np.inf) == pytest.approx(ref, rel=1e-9, abs=1e-6)
+    planes = K.fit_planes_inv_depth(zp, np.array(rects, np.int32))
+    for (u0, v0, u1, v1), (a, b, c) in zip(rects, planes):
+        v, u = np.mgrid[v0:v1, u0:u1].astype(float)
+        got = a * u + b * v + c
+        if u1 - u0 > 1 and v1 - v0 > 1:
+            m = np.stack([u.ravel(), v.ravel(), np.ones(u.size)], 1)
+            coef, *_ = np.linalg.lstsq(m, zp[v0:v1, u0:u1].ravel(), rcond=None)
+            np.testing.assert_allclose(got.ravel(), m @ coef, rtol=0, atol=1e-6 * np.abs(zp).max())
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_crease_split_matches_reference(seed):
+    """Vectorized column profile and rolling row buffers: same cut as the plain-Python twin."""
+    zp, _, _ = S.zprime(piecewise_scene(seed, h=70, w=90))
+    zp = np.ascontiguousarray(np.where(np.isfinite(zp), zp, 0.0))
+    rng = np.random.default_rng(seed)
+    for _ in range(60):
+        u0, v0 = rng.integers(0, 89), rng.integers(0, 69)
+        u1, v1 = rng.integers(u0 + 1, 91), rng.integers(v0 + 1, 71)
+        for peak in (1.5, S.CREASE_PEAK):
+            got = K.crease_split(zp, u0, v0, u1, v1, peak)
+            assert got == S._crease_split_reference(zp, u0, v0, u1, v1, peak)
+
+
+def test_segment_fast_path_equals_reference_on_rendered_room():
+    """Default segment() (fused break-edge prefix sums, SIMD fits) on a ray-traced room with
+    creases and occlusion steps: the same rects as the plain-Python reference split."""
+    from ibr.synth import make_scene, render, scene_cameras
+
+    cam = scene_cameras("room", width=160, height=120)[0]
+    view = render(make_scene("room"), cam)
+    seg = S.segment(view.depth, camera=cam)
+    tol = seg.tolerance_inv_depth
+    ref = S.split_rects(seg.inv_depth, method="edge", threshold=tol, reference=True)
+    assert len(seg.rects) > 20
+    assert seg.rects.tolist() == ref.tolist()
+    covers_valid_exactly_once(seg.rects, view.depth)
+    for u0, v0, u1, v1 in seg.rects:
+        if (u1 - u0) * (v1 - v0) > 1:
+            assert S._fit_max_residual_reference(seg.inv_depth, u0, v0, u1, v1) <= tol * (1 + 1e-9)
