@@ -545,54 +545,64 @@ def _stencil_state(a, c, b, thr):
 
 
 @njit(cache=True, inline="always")
-def _flag(sm1, s0, s1, fa, fb):
-    """Break flag of pair (i, i+1) from the stencil states at i-1, i, i+1 and the validity of
-    samples i and i+1 (same rule as :func:`_pair_break`: the one-sided stencil at i is the
-    centered one at i-1). Branch-free."""
+def _valid_bit(x):
+    """4 where sample ``x`` is valid (not NaN), else 0: bit 2 of a pixel code."""
+    return np.uint8(x == x) << np.uint8(2)
+
+
+@njit(cache=True, inline="always")
+def _flag(cm1, c0, c1):
+    """Break flag of pair (i, i+1) from the pixel codes at i-1, i, i+1 (bits 0-1: stencil state
+    0 unavailable / 1 straight / 2 bent, bit 2: sample valid). Same rule as :func:`_pair_break`
+    (the one-sided stencil at i is the centered one at i-1); branch-free on uint8 only, so the
+    loops vectorize."""
+    s0 = c0 & 3
+    s1 = c1 & 3
+    fa = (c0 >> 2) & 1
+    fb = (c1 >> 2) & 1
     st0 = s0 == 1
     st1 = s1 == 1
-    bt0 = s0 == 2
-    bt1 = s1 == 2
-    straddle = (bt0 | bt1) & ~st0 & ~st1  # every stencil straddling the pair is bent
-    crease = bt0 & st1 & (sm1 == 1)  # crease exactly at i
-    return np.uint8((fa != fb) | (fa & fb & (straddle | crease)))
+    straddle = ((s0 == 2) | (s1 == 2)) & ~st0 & ~st1  # every stencil straddling the pair is bent
+    crease = (s0 == 2) & st1 & ((cm1 & 3) == 1)  # crease exactly at i
+    return (fa ^ fb) | (fa & fb & np.uint8(straddle | crease))
 
 
 @njit(cache=True)
 def _edge_prefix_kernel(zp, thr, ch, rv):
     """Fill rows 1.. of ``ch`` and ``rv`` of :func:`edge_prefix` (row 0 must be zero already):
-    row by row, stencil states, break flags, prefix sums."""
+    row by row, pixel codes (stencil state + validity), break flags, prefix sums."""
     h, w = zp.shape
     blk = _RV_BLOCK
-    hs = np.zeros(w + 2, np.uint8)  # hs[u + 1] = horizontal state at u (0 at u = 0, w - 1, outside)
-    vs0 = np.zeros(w, np.uint8)  # vertical states at rows v - 1, v, v + 1
-    vs1 = np.zeros(w, np.uint8)
-    vs2 = np.zeros(w, np.uint8)
+    hc = np.zeros(w + 2, np.uint8)  # hc[u + 1] = horizontal code at u (state 0 at u = 0, w - 1)
+    vc0 = np.zeros(w, np.uint8)  # vertical codes at rows v - 1, v, v + 1
+    vc1 = np.zeros(w, np.uint8)
+    vc2 = np.zeros(w, np.uint8)
     vflags = np.zeros((w, blk), np.uint8)  # vflags[u, j]: flag of pair rows (v0 + j, v0 + j + 1)
     acc = np.zeros(blk, np.int32)
+    for u in range(w):
+        vc1[u] = _valid_bit(zp[0, u])  # no vertical stencil at row 0
     for v in range(h):
         row = zp[v]
+        hc[1] = _valid_bit(row[0])
+        hc[w] = _valid_bit(row[w - 1])
         for u in range(1, w - 1):
-            hs[u + 1] = _stencil_state(row[u - 1], row[u], row[u + 1], thr)
+            hc[u + 1] = _stencil_state(row[u - 1], row[u], row[u + 1], thr) | _valid_bit(row[u])
         for u in range(w - 1):
-            a = row[u]
-            b = row[u + 1]
-            ch[v + 1, u] = ch[v, u] + _flag(hs[u], hs[u + 1], hs[u + 2], a == a, b == b)
+            ch[v + 1, u] = ch[v, u] + _flag(hc[u], hc[u + 1], hc[u + 2])
         if v + 1 >= h:
             break
         nxt = zp[v + 1]
         if v + 2 < h:
             nn = zp[v + 2]
             for u in range(w):
-                vs2[u] = _stencil_state(row[u], nxt[u], nn[u], thr)
+                vc2[u] = _stencil_state(row[u], nxt[u], nn[u], thr) | _valid_bit(nxt[u])
         else:
-            vs2[:] = 0
+            for u in range(w):
+                vc2[u] = _valid_bit(nxt[u])
         j = v % blk
         for u in range(w):
-            a = row[u]
-            b = nxt[u]
-            vflags[u, j] = _flag(vs0[u], vs1[u], vs2[u], a == a, b == b)
-        vs0, vs1, vs2 = vs1, vs2, vs0
+            vflags[u, j] = _flag(vc0[u], vc1[u], vc2[u])
+        vc0, vc1, vc2 = vc1, vc2, vc0
         if j == blk - 1 or v == h - 2:  # row prefix sums of the buffered rows, stored transposed
             first = v - j
             nb = j + 1
