@@ -16,6 +16,7 @@ __all__ = [
     "check_choice",
     "check_finite_scalar",
     "check_image",
+    "check_near_far",
     "check_positive",
 ]
 
@@ -110,3 +111,12 @@ def check_choice(name: str, value, choices: Iterable[str]) -> str:
     if value not in choices:
         raise ValueError(f"{name}: expected one of {', '.join(map(repr, choices))}, got {value!r}")
     return value
+
+
+def check_near_far(near, far) -> tuple[float, float]:
+    """Return (near, far) as floats with 0 < near < far (far may be +inf), or raise naming them."""
+    n = check_positive("near", near)
+    f = check_positive("far", far, allow_inf=True)
+    if not f > n:
+        raise ValueError(f"far: expected far > near, got near={near!r}, far={far!r}")
+    return n, f

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from ._validate import check_array, check_finite_scalar, check_positive
+from ._validate import check_array, check_finite_scalar, check_near_far, check_positive
 
 __all__ = [
     "Camera",
@@ -258,19 +258,23 @@ class Camera:
         ``inf`` (infinite far plane). Window depth ``d = (z_ndc + 1) / 2`` of a point at planar
         depth z is then ``far / (far - near) * (1 - near / z)``, seed 002 eq. 2 divided by 2^24.
         """
-        n, f = _check_near_far(near, far)
-        w, h = self.width, self.height
-        p = np.zeros((4, 4))
-        p[0, 0] = 2 * self.fx / w
-        p[0, 2] = 1 - 2 * (self.cx + 0.5) / w
-        p[1, 1] = 2 * self.fy / h
-        p[1, 2] = 2 * (self.cy + 0.5) / h - 1
-        if np.isinf(f):
-            p[2, 2], p[2, 3] = -1.0, -2 * n
-        else:
-            p[2, 2], p[2, 3] = -(f + n) / (f - n), -2 * f * n / (f - n)
-        p[3, 2] = -1.0
-        return p
+        return self.gl_frustum(near, far).projection()
+
+    def gl_frustum(self, near: float, far: float) -> "GLFrustum":
+        """glFrustum(l, r, b, t, n, f) of this camera: the image edges on the near plane.
+
+        Pixel edges, not centers, bound the frustum: ``left = -(cx + 0.5) * near / fx``, so a
+        512-wide camera with cx = 255.5 and fx = 256 has left = -near, right = +near.
+        """
+        n, f = check_near_far(near, far)
+        return GLFrustum(
+            left=-(self.cx + 0.5) * n / self.fx,
+            right=(self.width - 0.5 - self.cx) * n / self.fx,
+            bottom=-(self.height - 0.5 - self.cy) * n / self.fy,
+            top=(self.cy + 0.5) * n / self.fy,
+            near=n,
+            far=f,
+        )
 
     def gl_view(self) -> np.ndarray:
         """OpenGL view matrix ``eye_gl_from_world`` (the modelview of a scene in world units)."""
@@ -317,14 +321,6 @@ class Camera:
             )
             and np.allclose(self.world_from_cam, other.world_from_cam, atol=atol)
         )
-
-
-def _check_near_far(near, far) -> tuple[float, float]:
-    n = check_positive("near", near)
-    f = check_positive("far", far, allow_inf=True)
-    if not f > n:
-        raise ValueError(f"far: expected far > near, got near={near!r}, far={far!r}")
-    return n, f
 
 
 def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
@@ -386,6 +382,21 @@ class GLFrustum:
     top: float
     near: float
     far: float
+
+    def projection(self) -> np.ndarray:
+        """The 4x4 OpenGL matrix (clip_from_eye_gl) of glFrustum(l, r, b, t, n, f); far may be inf."""
+        l, r, b, t, n, f = self.left, self.right, self.bottom, self.top, self.near, self.far
+        p = np.zeros((4, 4))
+        p[0, 0] = 2 * n / (r - l)
+        p[0, 2] = (r + l) / (r - l)
+        p[1, 1] = 2 * n / (t - b)
+        p[1, 2] = (t + b) / (t - b)
+        if np.isinf(f):
+            p[2, 2], p[2, 3] = -1.0, -2 * n
+        else:
+            p[2, 2], p[2, 3] = -(f + n) / (f - n), -2 * f * n / (f - n)
+        p[3, 2] = -1.0
+        return p
 
 
 def gl_frustum_from_projection(projection) -> GLFrustum:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import check_array, check_finite_scalar, check_positive
+from ._validate import check_array, check_finite_scalar, check_near_far as _near_far, check_positive
 
 __all__ = [
     "disparity_from_z",
@@ -47,14 +47,6 @@ __all__ = [
 
 #: Scale of the seed 002 nonlinear depth z' (eq. 2): z' = 2^24 * w.
 ZPRIME_SCALE = float(2**24)
-
-
-def _near_far(near, far) -> tuple[float, float]:
-    n = check_positive("near", near)
-    f = check_positive("far", far, allow_inf=True)
-    if not f > n:
-        raise ValueError(f"far: expected far > near, got near={near!r}, far={far!r}")
-    return n, f
 
 
 def _float(name: str, a) -> np.ndarray:

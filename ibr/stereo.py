@@ -64,22 +64,6 @@ def _unit(name: str, v) -> np.ndarray:
     return a / n
 
 
-def _gl_frustum_matrix(fr: GLFrustum) -> np.ndarray:
-    """glFrustum(l, r, b, t, n, f) as a 4x4 clip_from_eye_gl matrix."""
-    l, r, b, t, n, f = fr.left, fr.right, fr.bottom, fr.top, fr.near, fr.far
-    p = np.zeros((4, 4))
-    p[0, 0] = 2 * n / (r - l)
-    p[0, 2] = (r + l) / (r - l)
-    p[1, 1] = 2 * n / (t - b)
-    p[1, 2] = (t + b) / (t - b)
-    if np.isinf(f):
-        p[2, 2], p[2, 3] = -1.0, -2 * n
-    else:
-        p[2, 2], p[2, 3] = -(f + n) / (f - n), -2 * f * n / (f - n)
-    p[3, 2] = -1.0
-    return p
-
-
 @dataclass(frozen=True, eq=False)
 class StereoCamera:
     """Seed 000's stereo camera: parallel axes, asymmetric frusta (eqs. 1-4).
@@ -187,7 +171,7 @@ class StereoCamera:
 
     def gl_projection(self, eye: str) -> np.ndarray:
         """4x4 OpenGL projection (``glFrustum`` of :meth:`gl_frustum`), clip_from_eye_gl."""
-        return _gl_frustum_matrix(self.gl_frustum(eye))
+        return GLFrustum.projection(self.gl_frustum(eye))
 
     def gl_view(self, eye: str) -> np.ndarray:
         """4x4 OpenGL view matrix eye_gl_from_world (``gluLookAt(V_ep, V_ep + V_d, V_u)``)."""

@@ -210,6 +210,19 @@ def test_gl_frustum_recovers_textbook_glfrustum():
     np.testing.assert_allclose(uv, [[-0.5, 299.5], [399.5, -0.5]], atol=1e-9)
 
 
+def test_camera_gl_frustum_matches_the_textbook_matrix_and_its_recovery():
+    cam = Camera(500.0, 480.0, 250.25, 300.75, 640, 480)
+    fr = cam.gl_frustum(0.25, 80.0)
+    # Edges of the image (pixel edges, not centers) on the near plane.
+    assert fr.left == pytest.approx(-(250.25 + 0.5) * 0.25 / 500.0, rel=1e-15)
+    assert fr.top == pytest.approx((300.75 + 0.5) * 0.25 / 480.0, rel=1e-15)
+    np.testing.assert_allclose(fr.projection(), gl_frustum(fr.left, fr.right, fr.bottom, fr.top, 0.25, 80.0), rtol=1e-14)
+    back = gl_frustum_from_projection(cam.gl_projection(0.25, 80.0))
+    np.testing.assert_allclose(
+        [back.left, back.right, back.bottom, back.top, back.near, back.far],
+        [fr.left, fr.right, fr.bottom, fr.top, fr.near, fr.far], rtol=1e-12)
+
+
 def test_gl_ndc_signs_and_half_pixel():
     w, h = 64, 48
     cam = Camera(50.0, 55.0, 30.25, 20.75, w, h, pose_from([0.1, 0.2, 0.3], [0.5, 0.1, -1.0]))
