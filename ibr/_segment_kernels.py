@@ -568,12 +568,21 @@ def _flag(cm1, c0, c1):
 
 
 @njit(cache=True)
+def _add_row(dst, src, flags, n):
+    """dst[:n] = src[:n] + flags[:n] (a separate kernel on 1-D rows: the loop vectorizes, 3x
+    faster than the same sum written inline in the 2-D kernel)."""
+    for u in range(n):
+        dst[u] = src[u] + flags[u]
+
+
+@njit(cache=True)
 def _edge_prefix_kernel(zp, thr, ch, rv):
     """Fill rows 1.. of ``ch`` and ``rv`` of :func:`edge_prefix` (row 0 must be zero already):
     row by row, pixel codes (stencil state + validity), break flags, prefix sums."""
     h, w = zp.shape
     blk = _RV_BLOCK
     hc = np.zeros(w + 2, np.uint8)  # hc[u + 1] = horizontal code at u (state 0 at u = 0, w - 1)
+    hflags = np.zeros(max(w - 1, 0), np.uint8)
     vc0 = np.zeros(w, np.uint8)  # vertical codes at rows v - 1, v, v + 1
     vc1 = np.zeros(w, np.uint8)
     vc2 = np.zeros(w, np.uint8)
@@ -588,7 +597,8 @@ def _edge_prefix_kernel(zp, thr, ch, rv):
         for u in range(1, w - 1):
             hc[u + 1] = _stencil_state(row[u - 1], row[u], row[u + 1], thr) | _valid_bit(row[u])
         for u in range(w - 1):
-            ch[v + 1, u] = ch[v, u] + _flag(hc[u], hc[u + 1], hc[u + 2])
+            hflags[u] = _flag(hc[u], hc[u + 1], hc[u + 2])
+        _add_row(ch[v + 1], ch[v], hflags, w - 1)
         if v + 1 >= h:
             break
         nxt = zp[v + 1]
