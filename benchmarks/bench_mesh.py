@@ -4,6 +4,9 @@ Run from the repository root::
 
     python benchmarks/bench_mesh.py            # all scenes, incl. a 1920x1080 render (cached)
     python benchmarks/bench_mesh.py --quick    # skip the 1920x1080 scene and the sweep plot
+    python benchmarks/bench_mesh.py --timing --repeats 41 --baseline HEAD~2
+                                               # timing targets only (room 512x512, 1920x1080),
+                                               # this tree against a git revision, same run
 
 For every scene (synthetic room / clutter / grazing from ``ibr.synth``, the Middlebury
 motorcycle, and the room at 512x512 and 1920x1080 for the timing targets) and every method and
@@ -24,8 +27,11 @@ Writes ``benchmarks/results/mesh_quads_vs_error.png`` (copied to ``docs/img/``) 
 from __future__ import annotations
 
 import argparse
+import importlib
 import shutil
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -53,6 +59,38 @@ def median_ms(fn, repeats: int) -> float:
     return float(np.median(ts) * 1e3)
 
 
+def paired_ms(fn, base_fn, repeats: int) -> tuple[float, float]:
+    """(median ms of ``fn``, median of the per-repeat ratios fn / base_fn), the two timed back to
+    back in every repeat so that load bursts on the shared machine hit both alike."""
+    fn(), base_fn()
+    ts, ratios = [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        base_fn()
+        t1 = time.perf_counter()
+        fn()
+        t2 = time.perf_counter()
+        ts.append(t2 - t1)
+        ratios.append((t2 - t1) / (t1 - t0))
+    return float(np.median(ts) * 1e3), float(np.median(ratios))
+
+
+def room_view(width: int, height: int):
+    """The room scene rendered at another size (1920x1080 depth cached in benchmarks/results)."""
+    from ibr import synth
+    from ibr.view import View
+
+    cam, _ = synth.scene_cameras("room", width=width, height=height)
+    cache = RESULTS / f"room_{width}x{height}_depth.npy"
+    if cache.exists():
+        depth = np.load(cache)
+    else:
+        depth = synth.render(synth.make_scene("room"), cam).depth
+        if width * height > 10**6:
+            np.save(cache, depth)
+    return View(np.zeros((*depth.shape, 3), np.uint8), depth, cam, f"room{width}x{height}")
+
+
 def load_scenes(quick: bool):
     from ibr import synth
     from ibr.middlebury import motorcycle_views
@@ -65,16 +103,7 @@ def load_scenes(quick: bool):
     cam, _ = synth.scene_cameras("room", width=512, height=512)
     scenes["room 512x512"] = synth.render(synth.make_scene("room"), cam)
     if not quick:
-        cam, _ = synth.scene_cameras("room", width=1920, height=1080)
-        cache = RESULTS / "room_1920x1080_depth.npy"
-        if cache.exists():
-            depth = np.load(cache)
-        else:
-            depth = synth.render(synth.make_scene("room"), cam).depth
-            np.save(cache, depth)
-        from ibr.view import View
-
-        scenes["room 1920x1080"] = View(np.zeros((*depth.shape, 3), np.uint8), depth, cam, "room1080")
+        scenes["room 1920x1080"] = room_view(1920, 1080)
     return scenes
 
 
@@ -197,13 +226,55 @@ def segmentation_figure(scenes):
     print(f"wrote {out} (copied to docs/img)")
 
 
+def baseline_segment(rev: str):
+    """``segment`` of the ``ibr`` package at git revision ``rev``, imported from a temporary copy
+    (as package ``ibr_<rev>``) so that both versions run in one process."""
+    tmp = Path(tempfile.mkdtemp(prefix="bench_mesh_"))
+    tar = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "ibr"], check=True, capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(tmp)], input=tar, check=True)
+    name = "ibr_" + "".join(c if c.isalnum() else "_" for c in rev)
+    (tmp / "ibr").rename(tmp / name)
+    sys.path.insert(0, str(tmp))
+    return importlib.import_module(f"{name}.segment").segment
+
+
+def timing_table(repeats: int, baseline: str | None):
+    """Timing targets of issue 3: the default segmentation of the room at 512x512 and 1920x1080,
+    median ms and the median of paired ratios to ``cv2.Laplacian`` on the same float32 depth;
+    with ``baseline`` also that git revision's ``segment`` (same run) and whether the rects agree."""
+    versions = {"this tree": S.segment}
+    if baseline:
+        versions[baseline] = baseline_segment(baseline)
+    header = f"{'scene':<15} {'code':<12} {'quads':>6} {'ms':>7} {'x cv2.Lap':>9} {'same rects':>10}"
+    print(header)
+    print("-" * len(header))
+    for w, h in ((512, 512), (1920, 1080)):
+        view = room_view(w, h)
+        z = view.depth
+        zf = np.nan_to_num(z).astype(np.float32)
+        ref = S.segment(z, camera=view.camera).rects
+        for code, seg_fn in versions.items():
+            rects = seg_fn(z, camera=view.camera).rects
+            ms, ratio = paired_ms(lambda: seg_fn(z, camera=view.camera), lambda: cv2.Laplacian(zf, cv2.CV_32F), repeats)
+            same = "yes" if np.array_equal(rects, ref) else "NO"
+            print(f"{f'room {w}x{h}':<15} {code:<12} {len(rects):>6} {ms:>7.2f} {ratio:>9.1f} {same:>10}")
+        lap = median_ms(lambda: cv2.Laplacian(zf, cv2.CV_32F), repeats)
+        print(f"{'':<15} cv2.Laplacian float32 on the same depth: {lap:.3f} ms")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="skip the 1920x1080 scene and the plots")
     ap.add_argument("--repeats", type=int, default=9)
+    ap.add_argument("--timing", action="store_true", help="only the timing targets (room 512x512, 1920x1080)")
+    ap.add_argument("--baseline", metavar="REV", help="with --timing: also time ibr.segment at this git revision")
     args = ap.parse_args(argv)
     RESULTS.mkdir(parents=True, exist_ok=True)
     DOCS.mkdir(parents=True, exist_ok=True)
+    if args.timing:
+        print(f"single-threaded kernels; repeats {args.repeats}; medians, ratios paired per repeat\n")
+        timing_table(args.repeats, args.baseline)
+        return 0
     scenes = load_scenes(args.quick)
     print(f"numba threads: single-threaded kernels; repeats {args.repeats}; medians\n")
     table(scenes, args.repeats)

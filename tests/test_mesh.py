@@ -294,6 +294,25 @@ def test_constant_depth_at_far_plane():
     assert len(mesh) == 1 and mesh.info["far"] == 200.0
 
 
+def test_rendered_room_mesh_planes_are_lstsq_and_within_bound():
+    """The mesh stores the planes the split verified (one fit kernel, SIMD sums): on a ray-traced
+    room they equal numpy's lstsq planes to rounding and hold the default bound at every pixel."""
+    from ibr.synth import make_scene, render, scene_cameras
+
+    cam = scene_cameras("room", width=160, height=120)[0]
+    view = render(make_scene("room"), cam)
+    mesh = build_mesh(view)
+    check_partition(mesh, view.depth)
+    check_bound(mesh, view.depth)
+    q = 1.0 / view.depth.astype(np.float64)
+    for (u0, v0, u1, v1), plane in zip(mesh.rects, mesh.inv_depth_planes):
+        if u1 - u0 > 1 and v1 - v0 > 1:
+            v, u = np.mgrid[v0:v1, u0:u1].astype(float)
+            a = np.stack([u.ravel(), v.ravel(), np.ones(u.size)], 1)
+            coef, *_ = np.linalg.lstsq(a, q[v0:v1, u0:u1].ravel(), rcond=None)
+            np.testing.assert_allclose(a @ plane, a @ coef, rtol=1e-11)
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_error_bound_holds_on_random_scenes(seed):
     from test_segment import piecewise_scene
