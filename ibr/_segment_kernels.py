@@ -679,6 +679,27 @@ def crease_split(zp, u0, v0, u1, v1, peak):
     O((w + h) * CREASE_SAMPLES) rather than O(w * h). Otherwise (smooth curvature, or a
     rect too thin for a stencil) the rect is cut in the middle of its longer side.
     """
+    h, w = zp.shape
+    cache = _profile_cache(h, w)
+    return _crease_split_cached(zp, u0, v0, u1, v1, peak, cache[0], cache[1], cache[2], cache[3])
+
+
+@njit(cache=True)
+def _profile_cache(h, w):
+    """Empty line-profile caches for :func:`_crease_split_cached`: (column sums (W,), their key,
+    row sums (H,), their key); a key is (v0, v1, first, end) / (u0, u1, first, end), -1 = empty."""
+    return np.empty(w, np.float64), np.full(4, -1, np.int64), np.empty(h, np.float64), np.full(4, -1, np.int64)
+
+
+@njit(cache=True)
+def _crease_split_cached(zp, u0, v0, u1, v1, peak, col_sum, col_key, row_sum, row_key):
+    """:func:`crease_split` with its per-line sums kept between calls of one split.
+
+    A column's sum depends only on the rect's rows (v0, v1: which rows are sampled, in which
+    order) and a row's sum only on its columns (u0, u1), so a rect that shares them with the last
+    rect profiled in that direction (a failed fit's child, after a thin strip was cut off) reuses
+    the sums of its lines instead of re-reading them: the same floats, added in the same order.
+    """
     w = u1 - u0
     h = v1 - v0
     sv = max(1, h // CREASE_SAMPLES)  # lines are sampled: at most ~CREASE_SAMPLES per profile
@@ -689,11 +710,17 @@ def crease_split(zp, u0, v0, u1, v1, peak):
     cu = -1
     tot_u = 0.0
     if w >= 3:
-        acc = np.zeros(w, np.float64)
-        for v in range(v0, v1, sv):
-            _add_abs_second_diff(acc, zp[v, u0:u1], w)
+        if not (col_key[0] == v0 and col_key[1] == v1 and col_key[2] <= u0 + 1 and u1 - 1 <= col_key[3]):
+            acc = col_sum[u0:u1]  # acc[i]: column u0 + i
+            acc[:] = 0.0
+            for v in range(v0, v1, sv):
+                _add_abs_second_diff(acc, zp[v, u0:u1], w)
+            col_key[0] = v0
+            col_key[1] = v1
+            col_key[2] = u0 + 1
+            col_key[3] = u1 - 1
         for c in range(u0 + 1, u1 - 1):
-            m = acc[c - u0] / nsv
+            m = col_sum[c] / nsv
             tot_u += m
             if m > best_u:
                 best_u = m
@@ -704,25 +731,29 @@ def crease_split(zp, u0, v0, u1, v1, peak):
     cv = -1
     tot_v = 0.0
     if h >= 3:
-        acc = np.zeros(h, np.float64)
-        # the sampled pixels of rows r - 1, r, r + 1 in three rolling buffers: each row read once
-        ra = np.empty(nsu, np.float64)
-        rb = np.empty(nsu, np.float64)
-        rc = np.empty(nsu, np.float64)
-        for i in range(nsu):
-            ra[i] = zp[v0, u0 + i * su]
-            rb[i] = zp[v0 + 1, u0 + i * su]
-        for r in range(v0 + 1, v1 - 1):
-            nxt = zp[r + 1]
-            s = 0.0
+        if not (row_key[0] == u0 and row_key[1] == u1 and row_key[2] <= v0 + 1 and v1 - 1 <= row_key[3]):
+            # the sampled pixels of rows r - 1, r, r + 1 in rolling buffers: each row read once
+            ra = np.empty(nsu, np.float64)
+            rb = np.empty(nsu, np.float64)
+            rc = np.empty(nsu, np.float64)
             for i in range(nsu):
-                x = nxt[u0 + i * su]
-                rc[i] = x
-                s += abs(ra[i] - 2.0 * rb[i] + x)
-            acc[r - v0] = s
-            ra, rb, rc = rb, rc, ra
+                ra[i] = zp[v0, u0 + i * su]
+                rb[i] = zp[v0 + 1, u0 + i * su]
+            for r in range(v0 + 1, v1 - 1):
+                nxt = zp[r + 1]
+                s = 0.0
+                for i in range(nsu):
+                    x = nxt[u0 + i * su]
+                    rc[i] = x
+                    s += abs(ra[i] - 2.0 * rb[i] + x)
+                row_sum[r] = s
+                ra, rb, rc = rb, rc, ra
+            row_key[0] = u0
+            row_key[1] = u1
+            row_key[2] = v0 + 1
+            row_key[3] = v1 - 1
         for r in range(v0 + 1, v1 - 1):
-            m = acc[r - v0] / nsu
+            m = row_sum[r] / nsu
             tot_v += m
             if m > best_v:
                 best_v = m
@@ -760,6 +791,7 @@ def split_edges(zp, ch, rv, tol, first_dir, peak):
     stack[0, 2] = w
     stack[0, 3] = h
     stack[0, 4] = first_dir
+    col_sum, col_key, row_sum, row_key = _profile_cache(h, w)
     top = 1
     n = 0
     while top > 0:
@@ -817,7 +849,7 @@ def split_edges(zp, ch, rv, tol, first_dir, peak):
                 out[n, 3] = v1
                 n += 1
                 continue
-            d, split = crease_split(zp, u0, v0, u1, v1, peak)
+            d, split = _crease_split_cached(zp, u0, v0, u1, v1, peak, col_sum, col_key, row_sum, row_key)
         if d == 0:
             stack[top, 0] = split
             stack[top, 1] = v0

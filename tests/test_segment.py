@@ -371,6 +371,39 @@ def test_crease_split_matches_reference(seed):
             assert got == S._crease_split_reference(zp, u0, v0, u1, v1, peak)
 
 
+def test_crease_profile_cache_reuses_only_matching_lines():
+    """Line sums kept between calls of one split: nested rects sharing rows (columns) with the
+    last profiled rect reuse them; any other rect recomputes. Same cuts as fresh calls."""
+    zp, _, _ = S.zprime(piecewise_scene(5, h=60, w=80))
+    zp = np.ascontiguousarray(np.where(np.isfinite(zp), zp, 0.0))
+    cache = K._profile_cache(*zp.shape)
+    rng = np.random.default_rng(5)
+    rects = [(0, 0, 80, 60), (0, 3, 80, 60), (0, 3, 80, 4), (0, 4, 80, 60), (2, 4, 80, 60), (2, 4, 79, 60)]
+    rects += [(0, 0, 80, 60), (10, 4, 70, 60), (10, 4, 70, 50), (10, 20, 70, 60), (10, 4, 70, 60)]
+    rects += [(5, 10, 40, 50), (20, 10, 70, 50), (5, 10, 70, 50)]  # same lines, ranges beyond the cached
+    for _ in range(40):  # random nests: cut a strip off one side of the last rect, or restart
+        u0, v0, u1, v1 = rects[-1]
+        side = rng.integers(0, 5)
+        if side == 4 or min(u1 - u0, v1 - v0) < 4:
+            u0, v0 = rng.integers(0, 40), rng.integers(0, 30)
+            rects.append((u0, v0, rng.integers(u0 + 3, 81), rng.integers(v0 + 3, 61)))
+            continue
+        k = rng.integers(1, 3)
+        rects.append(((u0 + k, v0, u1, v1), (u0, v0 + k, u1, v1), (u0, v0, u1 - k, v1), (u0, v0, u1, v1 - k))[side])
+    rects += [(0, 0, 80, 60), (10, 4, 70, 50), (10, 4, 70, 60), (0, 0, 80, 60), (5, 10, 40, 50), (5, 10, 70, 50)]
+    for r in rects:
+        got = K._crease_split_cached(zp, *r, S.CREASE_PEAK, *cache)
+        assert got == K.crease_split(zp, *r, S.CREASE_PEAK) == S._crease_split_reference(zp, *r, S.CREASE_PEAK)
+        # the sums the call used are those a fresh cache computes for this rect
+        fresh = K._profile_cache(*zp.shape)
+        K._crease_split_cached(zp, *r, S.CREASE_PEAK, *fresh)
+        u0, v0, u1, v1 = r
+        if u1 - u0 >= 3:
+            assert np.array_equal(cache[0][u0 + 1 : u1 - 1], fresh[0][u0 + 1 : u1 - 1])
+        if v1 - v0 >= 3:
+            assert np.array_equal(cache[2][v0 + 1 : v1 - 1], fresh[2][v0 + 1 : v1 - 1])
+
+
 def test_segment_fast_path_equals_reference_on_rendered_room():
     """Default segment() (fused break-edge prefix sums, SIMD fits) on a ray-traced room with
     creases and occlusion steps: the same rects as the plain-Python reference split."""
