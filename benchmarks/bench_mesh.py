@@ -27,6 +27,7 @@ Writes ``benchmarks/results/mesh_quads_vs_error.png`` (copied to ``docs/img/``) 
 from __future__ import annotations
 
 import argparse
+import atexit
 import importlib
 import shutil
 import subprocess
@@ -230,6 +231,7 @@ def baseline_segment(rev: str):
     """``segment`` of the ``ibr`` package at git revision ``rev``, imported from a temporary copy
     (as package ``ibr_<rev>``) so that both versions run in one process."""
     tmp = Path(tempfile.mkdtemp(prefix="bench_mesh_"))
+    atexit.register(shutil.rmtree, tmp, ignore_errors=True)
     tar = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "ibr"], check=True, capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(tmp)], input=tar, check=True)
     name = "ibr_" + "".join(c if c.isalnum() else "_" for c in rev)
