@@ -7,6 +7,8 @@
   foreground objects, so each hole pixel takes the farther (background) of its nearest covered
   neighbours along the row and the column, never the foreground; the filled depth is the
   background's.
+* ``fill_background_rows``: the same rule along rows only, for horizontal-only parallax (stereo
+  pairs, seed 003): each run of uncovered pixels takes the deeper of its two row neighbours.
 
 Both return new arrays and a ``filled`` mask; nothing is invented silently (the interpolation
 result carries ``holes`` and ``filled``). Pixel convention: (u, v) = (column, row), centers at
@@ -18,9 +20,10 @@ from __future__ import annotations
 import numpy as np
 
 from . import _render_kernels as _k
-from ._validate import check_positive
+from . import _stereo_pair as _rows
+from ._validate import check_array, check_image, check_positive
 
-__all__ = ["FILLS", "fill_background", "fill_previous"]
+__all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous"]
 
 #: Fill modes accepted by :func:`ibr.interpolate` and ``ibr interpolate --fill``.
 FILLS = ("previous", "inpaint", "none")
@@ -115,3 +118,21 @@ def _fill_background_inplace(color, depth, holes, *, depth_tol: float = 0.05, ma
         _k.background_fill(color, depth, np.ascontiguousarray(holes), depth_tol, max_dist,
                            color.dtype.kind in "ui", filled)
     return filled
+
+
+def fill_background_rows(color, depth, coverage) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fill uncovered pixels row by row from the background side.
+
+    Each run of uncovered pixels takes the color and depth of the deeper of its two covered row
+    neighbours (a disocclusion opens behind a foreground edge, so the background is what the
+    hidden area most likely continues); runs at the image border take their only neighbour.
+    Returns copies ``(color float32 (H, W, C), depth float32, holes bool)``.
+    """
+    col = check_image("color", color)
+    col = np.ascontiguousarray((col[..., None] if col.ndim == 2 else col).astype(np.float32, copy=True))
+    d = check_array("depth", depth, shape=col.shape[:2], dtype_kind="f").astype(np.float32, copy=True)
+    cov = check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b")
+    d[~cov] = np.nan
+    holes = np.zeros(cov.shape, np.bool_)
+    _rows.fill_rows_background(col, d, np.ascontiguousarray(cov), holes)
+    return col, d, holes

@@ -43,7 +43,6 @@ __all__ = [
     "StereoPair",
     "anaglyph",
     "dubois_anaglyph",
-    "fill_background",
     "map_pixels",
     "pack_stereo",
     "stereo_cameras",
@@ -132,24 +131,6 @@ def map_pixels(view: View, *, dx: float, dz: float = 0.0, dpixel: float = 0.0,
                        dx, dz, dpixel, out_c, out_z, cov)
     out_z[~cov] = np.nan
     return MappedLayer(out_c, out_z, cov)
-
-
-def fill_background(color, depth, coverage) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Fill uncovered pixels row by row from the background side.
-
-    Each run of uncovered pixels takes the color and depth of the deeper of its two covered row
-    neighbours (a disocclusion opens behind a foreground edge, so the background is what the
-    hidden area most likely continues); runs at the image border take their only neighbour.
-    Returns copies ``(color float32 (H, W, C), depth float32, holes bool)``.
-    """
-    col = check_image("color", color)
-    col = np.ascontiguousarray((col[..., None] if col.ndim == 2 else col).astype(np.float32, copy=True))
-    d = check_array("depth", depth, shape=col.shape[:2], dtype_kind="f").astype(np.float32, copy=True)
-    cov = check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b")
-    d[~cov] = np.nan
-    holes = np.zeros(cov.shape, np.bool_)
-    _k.fill_rows_background(col, d, np.ascontiguousarray(cov), holes)
-    return col, d, holes
 
 
 # ---------------------------------------------------------------------- pairs

@@ -27,12 +27,12 @@ from ibr.stereo import (
     parallax_px,
     parallax_scene,
 )
+from ibr.fill import fill_background_rows
 from ibr.stereo_pair import (
     DUBOIS_RED_CYAN_LEFT,
     DUBOIS_RED_CYAN_RIGHT,
     anaglyph,
     dubois_anaglyph,
-    fill_background,
     map_pixels,
     pack_stereo,
     stereo_cameras,
@@ -284,7 +284,7 @@ def test_fill_background_matches_reference_and_takes_far_side():
     cov = rng.uniform(size=(5, 30)) > 0.3
     cov[4] = False
     ref = fill_rows_background_reference(color, depth, cov)
-    c, d, holes = fill_background(color, depth, cov)
+    c, d, holes = fill_background_rows(color, depth, cov)
     np.testing.assert_array_equal(holes, ref[2])
     np.testing.assert_array_equal(c, ref[0])
     np.testing.assert_array_equal(d[cov[...]] , ref[1][cov])
@@ -293,7 +293,7 @@ def test_fill_background_matches_reference_and_takes_far_side():
     col[0, 0], col[0, 4] = 0.2, 0.9
     dep = np.array([[1.0, 0, 0, 0, 5.0]], np.float32)
     cv = np.array([[True, False, False, False, True]])
-    c, d, holes = fill_background(col, dep, cv)
+    c, d, holes = fill_background_rows(col, dep, cv)
     np.testing.assert_allclose(c[0, 1:4], 0.9)
     np.testing.assert_allclose(d[0, 1:4], 5.0)
     assert holes[0].tolist() == [False, True, True, True, False]
