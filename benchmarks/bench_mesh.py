@@ -42,22 +42,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import cv2  # noqa: E402
+from benchmarks._timing import median_ms  # noqa: E402
 
 from ibr import segment as S  # noqa: E402
 from ibr.mesh import _mesh_from_segmentation, segmentation_image  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 DOCS = ROOT / "docs" / "img"
-
-
-def median_ms(fn, repeats: int) -> float:
-    fn()  # warm (numba cache load, allocator)
-    ts = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t)
-    return float(np.median(ts) * 1e3)
 
 
 def paired_ms(fn, base_fn, repeats: int) -> tuple[float, float]:

@@ -31,6 +31,7 @@ from scipy.ndimage import maximum_filter1d
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from benchmarks._timing import median_seconds as median_time  # noqa: E402
 from ibr import synth  # noqa: E402
 from ibr.lens import RadialDistortion, distortion_maps, predistort  # noqa: E402
 from ibr.stereo import auto_stereo  # noqa: E402
@@ -39,16 +40,6 @@ from ibr.timewarp import guard_band_camera, rotation_maps, upconvert, warp_rotat
 
 RESULTS = ROOT / "benchmarks" / "results"
 DOCS = ROOT / "docs" / "img"
-
-
-def median_time(fn, repeats: int) -> float:
-    fn()  # warm-up (numba compile / caches)
-    ts = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t)
-    return float(np.median(ts))
 
 
 def _rotated(cam, yaw=0.0, pitch=0.0, roll=0.0):

@@ -17,15 +17,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
-
-
-def median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+from benchmarks._timing import median_seconds  # noqa: E402
 
 
 def equirect_dirs(w: int, h: int) -> np.ndarray:
@@ -47,11 +39,11 @@ def main(argv=None) -> int:
         scene = make_scene(name)
         cam, _ = scene_cameras(name)
         rows.append((name, len(scene.primitives), "512x384 k=1",
-                     median_time(lambda: render(scene, cam), args.repeats)))
+                     median_seconds(lambda: render(scene, cam), args.repeats, warm=False)))
         rows.append((name, len(scene.primitives), "512x384 k=3",
-                     median_time(lambda: render(scene, cam, supersample=3), args.repeats)))
+                     median_seconds(lambda: render(scene, cam, supersample=3), args.repeats, warm=False)))
         rows.append((name, len(scene.primitives), "equirect 1024x512",
-                     median_time(lambda: render_rays(scene, (0.0, 0.0, 1.0), dirs), args.repeats)))
+                     median_seconds(lambda: render_rays(scene, (0.0, 0.0, 1.0), dirs), args.repeats, warm=False)))
     base = rows[0][3]
     print(f"{'scene':8s} {'prims':>5s}  {'job':18s} {'median s':>9s} {'x baseline':>10s}")
     for name, n, job, t in rows:
