@@ -182,11 +182,14 @@ def plot_speed(plt, rows) -> None:
     print(f"wrote {RESULTS / 'stereo_speed.png'}")
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", choices=("speed", "lens", "upconvert"), default=None)
     ap.add_argument("--repeats", type=int, default=7)
-    args = ap.parse_args()
+    ap.add_argument("--quick", action="store_true", help="speed table only, 3 repeats (ibr bench)")
+    args = ap.parse_args(argv)
+    if args.quick:
+        args.only, args.repeats = args.only or "speed", min(args.repeats, 3)
     import matplotlib
 
     matplotlib.use("Agg")

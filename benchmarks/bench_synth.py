@@ -32,7 +32,10 @@ def main(argv=None) -> int:
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--quick", action="store_true", help="one repeat (ibr bench)")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.repeats = 1
     dirs = equirect_dirs(1024, 512)
     rows = []
     for name in ("grazing", "room", "clutter"):
