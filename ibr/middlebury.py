@@ -17,6 +17,14 @@ Note: the skimage docstring's example "``img_left[10, 10 + disp[10, 10]]`` corre
 real images photometrically. Invalid disparities (stored as +inf) become NaN depth.
 Pixel convention as everywhere: pixel (u, v) = (column, row) has its center at integer
 coordinates; the calibration values are used as given.
+
+Calibration evidence (issue 4): the docstring values may be the full-size ones divided by 4
+without the downsampling pixel-center term ((c_full + 0.5)/4 - 0.5 = c_full/4 - 0.375 for
+``downscale_local_mean``). That term would shift cx *and* cx + doffs *and* cy of both cameras
+alike, and in this rectified pair it cancels (u_r - cx_r = u_l - cx_l - B f / z, same row), so no
+correction is applied. Measured: the left->right mesh warp matches the real right image best
+within 0.05 px of zero global offset (PSNR grid over target cx/cy shifts; tile phase correlation
+on textured non-edge regions: median shift below 0.01 px); checked in tests/test_middlebury.py.
 """
 
 from __future__ import annotations
