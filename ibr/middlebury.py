@@ -40,6 +40,7 @@ __all__ = [
     "motorcycle_cameras",
     "motorcycle_disparity",
     "motorcycle_views",
+    "snap_mixed_disparity",
 ]
 
 #: Quarter-size calibration of the motorcycle pair, pixels and metres.
@@ -74,8 +75,60 @@ def motorcycle_disparity() -> np.ndarray:
     return disp
 
 
-def motorcycle_views() -> tuple[View, View]:
+def snap_mixed_disparity(disp: np.ndarray, color: np.ndarray, *, min_jump: float = 2.0) -> np.ndarray:
+    """Move *mixed* disparities at depth edges to the side whose color they match.
+
+    The bundled disparity was downsampled by 4 with a local mean, so a pixel straddling a depth
+    edge carries an average of foreground and background disparity: a "flying" sample that lands
+    between the two surfaces in any new view. A pixel is mixed when its 3x3 neighbourhood spans
+    more than ``min_jump`` px of disparity and its own value lies more than 0.5 px inside that
+    range; it then takes the extreme (largest or smallest) disparity of the neighbour whose RGB
+    color is closer to its own (squared distance; ties go to the background). Other pixels and
+    NaNs are unchanged.
+
+    Parameters
+    ----------
+    disp : (H, W) float array
+        Disparity in pixels, NaN where unknown.
+    color : (H, W, 3) array
+        The image the disparity belongs to (any value scale).
+    min_jump : float, keyword-only
+        Disparity range (px) in the 3x3 window that marks a depth edge.
+
+    Returns
+    -------
+    (H, W) float32 disparity.
+
+    Measured on the motorcycle (0.9% of pixels changed): mesh left->right PSNR 27.46 -> 27.76 dB,
+    ``cv2.warpFrame`` 25.43 -> 25.50 dB; snapping every mixed pixel to the foreground gives 27.71,
+    to the background 27.39 (``python benchmarks/bench_render.py``).
+    """
+    d = np.asarray(disp, dtype=np.float64)
+    c = np.asarray(color, dtype=np.float64)
+    if d.ndim != 2 or c.shape[:2] != d.shape or c.ndim != 3:
+        raise ValueError(f"snap_mixed_disparity: expected disp (H, W) and color (H, W, 3), got {d.shape} and {c.shape}")
+    h, w = d.shape
+    pd = np.pad(d, 1, constant_values=np.nan)
+    pc = np.pad(c, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    win = np.stack([pd[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] for dy in (-1, 0, 1) for dx in (-1, 0, 1)])
+    cwin = np.stack([pc[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] for dy in (-1, 0, 1) for dx in (-1, 0, 1)])
+    fin = np.isfinite(win)
+    rows, cols = np.indices((h, w))
+    lo = np.where(fin, win, np.inf).argmin(0)
+    hi = np.where(fin, win, -np.inf).argmax(0)
+    d_lo, d_hi = win[lo, rows, cols], win[hi, rows, cols]
+    with np.errstate(invalid="ignore"):
+        mixed = np.isfinite(d) & (d_hi - d_lo > min_jump) & (d - d_lo > 0.5) & (d_hi - d > 0.5)
+    near_hi = ((c - cwin[hi, rows, cols]) ** 2).sum(-1) < ((c - cwin[lo, rows, cols]) ** 2).sum(-1)
+    return np.where(mixed, np.where(near_hi, d_hi, d_lo), d).astype(np.float32)
+
+
+def motorcycle_views(*, mixed: str = "keep") -> tuple[View, View]:
     """The motorcycle pair as ``(left, right)`` views.
+
+    ``mixed="snap"`` cleans the disparity with :func:`snap_mixed_disparity` first (mixed
+    foreground/background averages at depth edges from the 4x local-mean downsampling);
+    ``"keep"`` (default) uses the ground truth as shipped.
 
     ``left.depth`` is planar z in metres, ``z = B f / (d + doffs)``, NaN where the disparity is
     unknown; ``right.depth`` is None (Middlebury ships no right ground truth in skimage).
@@ -83,7 +136,11 @@ def motorcycle_views() -> tuple[View, View]:
     """
     from skimage.data import stereo_motorcycle
 
+    if mixed not in ("keep", "snap"):
+        raise ValueError(f"mixed: expected 'keep' or 'snap', got {mixed!r}")
     img_left, img_right, disp = stereo_motorcycle()
+    if mixed == "snap":
+        disp = snap_mixed_disparity(np.where(np.isfinite(disp), disp, np.nan), img_left)
     c = MOTORCYCLE_CALIBRATION
     z = z_from_disparity(disp, baseline=c["baseline"], focal_px=c["focal_px"], doffs=c["doffs"])
     cam_left, cam_right = motorcycle_cameras()

@@ -137,3 +137,63 @@ def test_no_global_subpixel_offset_and_pixel_center_shift_cancels(pair):
     cl = dataclasses.replace(left.camera, cx=left.camera.cx + s, cy=left.camera.cy + s)
     cr = dataclasses.replace(right.camera, cx=right.camera.cx + s, cy=right.camera.cy + s)
     assert abs(score(View(left.color, left.depth, cl, "l"), cr) - base) < 0.01
+
+
+def test_snap_mixed_disparity_on_a_step_edge():
+    from ibr.middlebury import snap_mixed_disparity
+
+    disp = np.tile(np.array([10, 10, 10, 30, 30, 30, 30], np.float64), (5, 1))
+    color = np.zeros((5, 7, 3), np.uint8)
+    color[:, 3:] = 200
+    disp[:, 3] = 20.0  # mixed sample, colored like the foreground (disparity 30)
+    disp[2, 3] = 14.0  # mixed sample colored like the background (disparity 10)
+    color[2, 3] = 5
+    disp[0, 0] = np.nan
+    out = snap_mixed_disparity(disp, color)
+    assert out.dtype == np.float32
+    assert np.all(out[[0, 1, 3, 4], 3] == 30) and out[2, 3] == 10
+    assert np.isnan(out[0, 0])
+    keep = np.ones_like(out, bool)
+    keep[:, 3] = False
+    keep[0, 0] = False
+    np.testing.assert_array_equal(out[keep], disp[keep])  # away from the edge nothing changes
+    ramp = np.tile(np.arange(7, dtype=np.float64) * 0.9, (5, 1))  # slope < min_jump: untouched
+    np.testing.assert_array_equal(snap_mixed_disparity(ramp, color), ramp.astype(np.float32))
+    with pytest.raises(ValueError, match="color"):
+        snap_mixed_disparity(disp, color[:, :3])
+    with pytest.raises(ValueError, match="mixed"):
+        motorcycle_views(mixed="foreground")
+
+
+def test_snapping_mixed_disparities_improves_the_warp_and_the_margin_over_warpframe():
+    """Real data: mixed (averaged) disparities at depth edges are the mesh's largest fixable error.
+
+    Measured: mesh 27.46 -> 27.76 dB, cv2.warpFrame (exact doffs) 25.43 -> 25.50 dB, margin
+    +2.03 -> +2.26 dB, coverage 83.4/82.9% -> 83.5/83.0%. Thresholds: measured minus 0.2 dB.
+    """
+    from ibr.interpolate import warp
+
+    def psnr(a, b, mask):
+        d = (a.astype(np.float64) - b.astype(np.float64))[mask]
+        return 10 * np.log10(255.0**2 / np.mean(d**2))
+
+    def warpframe(view, cam):  # as benchmarks/bench_render.py: doffs folded exactly into Rt
+        src = view.camera
+        rt = cam.cam_from_world @ src.world_from_cam
+        rt[0, :3] += (cam.cx - src.cx) / src.fx * rt[2, :3]
+        rt[0, 3] += (cam.cx - src.cx) / src.fx * rt[2, 3]
+        depth = np.nan_to_num(view.depth, nan=0.0).astype(np.float32)
+        _, img, mask = cv2.warpFrame(depth, np.ascontiguousarray(view.color), None, rt, src.K)
+        return img, mask > 0
+
+    res = {}
+    for mode in ("keep", "snap"):
+        left, right = motorcycle_views(mixed=mode)
+        r = warp(left, right.camera, fill="none")
+        img, cov = warpframe(left, right.camera)
+        res[mode] = (psnr(r.color, right.color, ~r.holes), psnr(img, right.color, cov))
+        assert (~r.holes).mean() >= cov.mean()
+    (mk, wk), (ms, ws) = res["keep"], res["snap"]
+    assert ms > mk + 0.2
+    assert ms - ws >= 2.26 - 0.2
+    assert ms - ws > mk - wk + 0.1
