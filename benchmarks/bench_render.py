@@ -40,7 +40,7 @@ import cv2  # noqa: E402
 from skimage.metrics import structural_similarity  # noqa: E402
 
 from ibr.composite import composite, viewpoint_weights  # noqa: E402
-from ibr.interpolate import interpolate, source_mesh, warp  # noqa: E402
+from ibr.view_synthesis import interpolate, source_mesh, warp  # noqa: E402
 from ibr.io import load_view  # noqa: E402
 from ibr.render import Layer  # noqa: E402
 from ibr.view import View  # noqa: E402

@@ -55,7 +55,7 @@ def run(args) -> int:
 
     from commands._common import info
     from commands.interpolate import _metrics, _to_float, _to_png
-    from ibr.interpolate import source_mesh, warp
+    from ibr.view_synthesis import source_mesh, warp
     from ibr.io import atomic_path, load_view, write_depth, write_image
     from ibr.view import View
 

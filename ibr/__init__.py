@@ -33,9 +33,10 @@ _EXPORTS = {
     # mesh.py / segment.py
     "build_mesh": "mesh",
     "QuadMesh": "mesh",
-    # interpolate.py (rendering issue)
-    "warp": "interpolate",
-    "interpolate": "interpolate",
+    # view_synthesis.py
+    "warp": "view_synthesis",
+    "interpolate": "view_synthesis",
+    "Rendering": "view_synthesis",
 }
 
 __all__ = sorted(_EXPORTS) + ["__version__"]

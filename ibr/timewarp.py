@@ -141,7 +141,7 @@ def warp_rotation(color, src: Camera, dst: Camera, *, ignore_translation: bool =
 
 
 def _depth_warp(view: View, dst: Camera) -> TimewarpFrame:
-    from .interpolate import warp  # the renderer: quad mesh + z-buffer + background hole fill
+    from .view_synthesis import warp  # the renderer: quad mesh + z-buffer + background hole fill
 
     res = warp(view, dst)
     color = np.asarray(res.color)

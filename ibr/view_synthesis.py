@@ -15,8 +15,6 @@ output colors keep the sources' dtype (uint8 in, uint8 out, rounded to nearest).
 
 from __future__ import annotations
 
-import sys as _sys
-import types as _types
 import weakref
 from dataclasses import dataclass
 from typing import Iterator, Sequence
@@ -396,15 +394,3 @@ def interpolate(
     )
     single = isinstance(t, (Camera, View)) or np.ndim(t) == 0
     return frames[0] if single else frames
-
-
-# ``ibr.interpolate`` names both this module and the function (contract 7 of the package). Python
-# binds the *module* to the package attribute when the module is first imported directly
-# (``from ibr.interpolate import Rendering``), which would shadow the lazily exported function;
-# making the module callable keeps ``ibr.interpolate(a, b, t)`` working in either order.
-class _CallableModule(_types.ModuleType):
-    def __call__(self, *args, **kwargs):
-        return interpolate(*args, **kwargs)
-
-
-_sys.modules[__name__].__class__ = _CallableModule

@@ -12,12 +12,12 @@ import pytest
 import cli
 import ibr
 from ibr.camera import Camera, look_at
-from ibr.interpolate import Rendering, interpolate, source_mesh, warp
+from ibr.view_synthesis import Rendering, interpolate, source_mesh, warp
 from ibr.io import load_view, read_image, save_view
 from ibr.view import View
 from samples import DATA_DIR
 
-_interp_module = importlib.import_module("ibr.interpolate")
+_interp_module = importlib.import_module("ibr.view_synthesis")
 
 
 def psnr(a, b, mask=None) -> float:
@@ -234,3 +234,13 @@ def test_cli_long_run_progress(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "interpolate 11/11" in err and "ground truth: mean PSNR" in err
     assert len(list(tmp_path.glob("frame_*.png"))) == 11
+
+
+def test_top_level_names_are_the_functions_whatever_was_imported_first():
+    import subprocess
+    import sys
+
+    code = ("import ibr.view_synthesis, ibr, types; "
+            "assert isinstance(ibr.interpolate, types.FunctionType), ibr.interpolate; "
+            "assert ibr.warp is ibr.view_synthesis.warp and ibr.Rendering is ibr.view_synthesis.Rendering")
+    subprocess.run([sys.executable, "-c", code], check=True)

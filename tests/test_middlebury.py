@@ -119,7 +119,7 @@ def test_no_global_subpixel_offset_and_pixel_center_shift_cancels(pair):
     """
     import dataclasses
 
-    from ibr.interpolate import warp
+    from ibr.view_synthesis import warp
     from ibr.view import View
 
     left, right, _ = pair
@@ -171,7 +171,7 @@ def test_snapping_mixed_disparities_improves_the_warp_and_the_margin_over_warpfr
     Measured: mesh 27.46 -> 27.76 dB, cv2.warpFrame (exact doffs) 25.43 -> 25.50 dB, margin
     +2.03 -> +2.26 dB, coverage 83.4/82.9% -> 83.5/83.0%. Thresholds: measured minus 0.2 dB.
     """
-    from ibr.interpolate import warp
+    from ibr.view_synthesis import warp
 
     def psnr(a, b, mask):
         d = (a.astype(np.float64) - b.astype(np.float64))[mask]
