@@ -26,3 +26,19 @@ def median_seconds(fn, repeats: int, *, warm: bool = True) -> float:
 def median_ms(fn, repeats: int, *, warm: bool = True) -> float:
     """:func:`median_seconds` in milliseconds."""
     return 1e3 * median_seconds(fn, repeats, warm=warm)
+
+
+def paired_ms(fn, base_fn, repeats: int) -> tuple[float, float]:
+    """(median ms of ``fn``, median of the per-repeat ratios fn / base_fn), the two timed back to
+    back in every repeat so that load bursts on the shared machine hit both alike."""
+    fn(), base_fn()
+    ts, ratios = [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        base_fn()
+        t1 = time.perf_counter()
+        fn()
+        t2 = time.perf_counter()
+        ts.append(t2 - t1)
+        ratios.append((t2 - t1) / (t1 - t0))
+    return float(np.median(ts) * 1e3), float(np.median(ratios))

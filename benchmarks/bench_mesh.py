@@ -42,29 +42,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import cv2  # noqa: E402
-from benchmarks._timing import median_ms  # noqa: E402
+from benchmarks._timing import median_ms, paired_ms  # noqa: E402
 
 from ibr import segment as S  # noqa: E402
 from ibr.mesh import _mesh_from_segmentation, segmentation_image  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 DOCS = ROOT / "docs" / "img"
-
-
-def paired_ms(fn, base_fn, repeats: int) -> tuple[float, float]:
-    """(median ms of ``fn``, median of the per-repeat ratios fn / base_fn), the two timed back to
-    back in every repeat so that load bursts on the shared machine hit both alike."""
-    fn(), base_fn()
-    ts, ratios = [], []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        base_fn()
-        t1 = time.perf_counter()
-        fn()
-        t2 = time.perf_counter()
-        ts.append(t2 - t1)
-        ratios.append((t2 - t1) / (t1 - t0))
-    return float(np.median(ts) * 1e3), float(np.median(ratios))
 
 
 def room_view(width: int, height: int):

@@ -40,6 +40,7 @@ import cv2  # noqa: E402
 from skimage.metrics import structural_similarity  # noqa: E402
 
 from ibr.composite import composite, viewpoint_weights  # noqa: E402
+from benchmarks._timing import median_ms, paired_ms  # noqa: E402
 from ibr.view_synthesis import interpolate, source_mesh, warp  # noqa: E402
 from ibr.io import load_view  # noqa: E402
 from ibr.render import Layer  # noqa: E402
@@ -48,32 +49,6 @@ from samples import DATA_DIR  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 DOCS = ROOT / "docs" / "img"
-
-
-def median_ms(fn, repeats: int) -> float:
-    fn()  # warm: numba cache load, allocator
-    ts = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t)
-    return float(np.median(ts) * 1e3)
-
-
-def paired_ms(fn, base_fn, repeats: int) -> tuple[float, float]:
-    """(median ms of ``fn``, median of the per-repeat ratios fn / base_fn), the two timed back to
-    back in every repeat so that load bursts on the shared machine hit both alike."""
-    fn(), base_fn()
-    ts, ratios = [], []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        base_fn()
-        t1 = time.perf_counter()
-        fn()
-        t2 = time.perf_counter()
-        ts.append(t2 - t1)
-        ratios.append((t2 - t1) / (t1 - t0))
-    return float(np.median(ts) * 1e3), float(np.median(ratios))
 
 
 def psnr(a, b, mask=None) -> float:

@@ -282,6 +282,28 @@ def _rowcum_t(mask):
 # ------------------------------------------------------------------ binary split (paper)
 
 
+@njit(cache=True, inline="always")
+def _put_rect(stack, row, u0, v0, u1, v1, direction):
+    stack[row, 0] = u0
+    stack[row, 1] = v0
+    stack[row, 2] = u1
+    stack[row, 3] = v1
+    stack[row, 4] = direction
+
+
+@njit(cache=True, inline="always")
+def _push_children(stack, top, u0, v0, u1, v1, d, split):
+    """Push the two halves of rect [u0, u1) x [v0, v1) cut at ``split`` along axis ``d`` (0: at
+    column u = split, 1: at row v = split), the high child first so that the low child is
+    processed first; each child splits along the other axis next (the seed's alternation)."""
+    if d == 0:
+        _put_rect(stack, top, split, v0, u1, v1, 1)
+        _put_rect(stack, top + 1, u0, v0, split, v1, 1)
+    else:
+        _put_rect(stack, top, u0, split, u1, v1, 0)
+        _put_rect(stack, top + 1, u0, v0, u1, split, 0)
+
+
 @njit(cache=True)
 def split_pixels(bad, invalid, min_band, first_dir):
     """Seed 002 binary split on a per-pixel "over threshold" map (faithful mode).
@@ -355,29 +377,7 @@ def split_pixels(bad, invalid, min_band, first_dir):
                 split = k + 1
             else:
                 split = lo + (hi - lo) // 2
-        # push the high child first so that the low child is processed first
-        if d == 0:
-            stack[top, 0] = split
-            stack[top, 1] = v0
-            stack[top, 2] = u1
-            stack[top, 3] = v1
-            stack[top, 4] = 1
-            stack[top + 1, 0] = u0
-            stack[top + 1, 1] = v0
-            stack[top + 1, 2] = split
-            stack[top + 1, 3] = v1
-            stack[top + 1, 4] = 1
-        else:
-            stack[top, 0] = u0
-            stack[top, 1] = split
-            stack[top, 2] = u1
-            stack[top, 3] = v1
-            stack[top, 4] = 0
-            stack[top + 1, 0] = u0
-            stack[top + 1, 1] = v0
-            stack[top + 1, 2] = u1
-            stack[top + 1, 3] = split
-            stack[top + 1, 4] = 0
+        _push_children(stack, top, u0, v0, u1, v1, d, split)
         top += 2
     return out[:n].copy()
 
@@ -850,27 +850,6 @@ def split_edges(zp, ch, rv, tol, first_dir, peak):
                 n += 1
                 continue
             d, split = _crease_split_cached(zp, u0, v0, u1, v1, peak, col_sum, col_key, row_sum, row_key)
-        if d == 0:
-            stack[top, 0] = split
-            stack[top, 1] = v0
-            stack[top, 2] = u1
-            stack[top, 3] = v1
-            stack[top, 4] = 1
-            stack[top + 1, 0] = u0
-            stack[top + 1, 1] = v0
-            stack[top + 1, 2] = split
-            stack[top + 1, 3] = v1
-            stack[top + 1, 4] = 1
-        else:
-            stack[top, 0] = u0
-            stack[top, 1] = split
-            stack[top, 2] = u1
-            stack[top, 3] = v1
-            stack[top, 4] = 0
-            stack[top + 1, 0] = u0
-            stack[top + 1, 1] = v0
-            stack[top + 1, 2] = u1
-            stack[top + 1, 3] = split
-            stack[top + 1, 4] = 0
+        _push_children(stack, top, u0, v0, u1, v1, d, split)
         top += 2
     return out[:n].copy()
