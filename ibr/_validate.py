@@ -18,6 +18,7 @@ __all__ = [
     "check_image",
     "check_near_far",
     "check_positive",
+    "check_unit_vector",
 ]
 
 
@@ -120,3 +121,13 @@ def check_near_far(near, far) -> tuple[float, float]:
     if not f > n:
         raise ValueError(f"far: expected far > near, got near={near!r}, far={far!r}")
     return n, f
+
+
+def check_unit_vector(name: str, value) -> np.ndarray:
+    """Return the 3-vector ``value`` normalized to unit length (float64), or raise naming ``name``
+    when it is not a finite, non-zero 3-vector."""
+    a = check_array(name, value, shape=(3,), dtype_kind="fiu").astype(np.float64)
+    n = np.linalg.norm(a)
+    if not np.isfinite(n) or n == 0:
+        raise ValueError(f"{name}: expected a finite non-zero 3-vector, got {a.tolist()}")
+    return a / n

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_array, check_choice, check_finite_scalar, check_positive
+from ._validate import check_array, check_choice, check_finite_scalar, check_positive, check_unit_vector as _unit
 from .camera import Camera, GLFrustum, camera_from_gl_projection
 
 __all__ = [
@@ -54,14 +54,6 @@ EYES = ("left", "right")
 
 #: Valyus's convergence tolerance (seed 000 section 3.3); 2 tan(0.8 deg) = 0.0279, the seed's 0.028f.
 DEFAULT_MAX_ANGLE_DEG = 1.6
-
-
-def _unit(name: str, v) -> np.ndarray:
-    a = check_array(name, v, shape=(3,), dtype_kind="fiu").astype(np.float64)
-    n = np.linalg.norm(a)
-    if not np.isfinite(n) or n == 0:
-        raise ValueError(f"{name}: expected a finite non-zero 3-vector, got {a.tolist()}")
-    return a / n
 
 
 @dataclass(frozen=True, eq=False)

@@ -34,7 +34,7 @@ import numpy as np
 from ._synth_prims import Box, Primitive, Rect, Sphere, mat3, rotation
 from ._synth_scenes import SCENES, build_scene, camera_poses, make_staircase
 from ._synth_texture import TEXTURE_NAMES, ImageTexture, checker_texture, image_texture
-from ._validate import check_array
+from ._validate import check_array, check_unit_vector as _unit
 from .camera import Camera
 from .view import View
 
@@ -85,14 +85,6 @@ class Hit:
     def valid(self) -> np.ndarray:
         """(N,) bool, True where the ray hit something."""
         return self.prim >= 0
-
-
-def _unit(name: str, v) -> np.ndarray:
-    a = check_array(name, v, shape=(3,), dtype_kind="fiu").astype(np.float64)
-    n = np.linalg.norm(a)
-    if not np.isfinite(n) or n == 0:
-        raise ValueError(f"{name}: expected a finite non-zero vector, got {a.tolist()}")
-    return a / n
 
 
 @dataclass(frozen=True, eq=False)
