@@ -44,8 +44,8 @@ sys.path.insert(0, str(ROOT))
 import cv2  # noqa: E402
 from benchmarks._timing import median_ms, paired_ms  # noqa: E402
 
-from ibr import segment as S  # noqa: E402
-from ibr.mesh import _mesh_from_segmentation, segmentation_image  # noqa: E402
+from ibr.mesh import segment as S  # noqa: E402
+from ibr.mesh.quad_mesh import _mesh_from_segmentation, segmentation_image  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 DOCS = ROOT / "docs" / "img"
@@ -54,7 +54,7 @@ DOCS = ROOT / "docs" / "img"
 def room_view(width: int, height: int):
     """The room scene rendered at another size (1920x1080 depth cached in benchmarks/results)."""
     from ibr import synth
-    from ibr.view import View
+    from ibr.base.view import View
 
     cam, _ = synth.scene_cameras("room", width=width, height=height)
     cache = RESULTS / f"room_{width}x{height}_depth.npy"
@@ -69,7 +69,7 @@ def room_view(width: int, height: int):
 
 def load_scenes(quick: bool):
     from ibr import synth
-    from ibr.middlebury import motorcycle_views
+    from ibr.io.middlebury import motorcycle_views
 
     scenes = {}
     for name in ("room", "clutter", "grazing"):

@@ -39,12 +39,12 @@ sys.path.insert(0, str(ROOT))
 import cv2  # noqa: E402
 from skimage.metrics import structural_similarity  # noqa: E402
 
-from ibr.composite import composite, viewpoint_weights  # noqa: E402
+from ibr.render.composite import composite, viewpoint_weights  # noqa: E402
 from benchmarks._timing import median_ms, paired_ms  # noqa: E402
-from ibr.view_synthesis import interpolate, source_mesh, warp  # noqa: E402
+from ibr.render.view_synthesis import interpolate, source_mesh, warp  # noqa: E402
 from ibr.io import load_view  # noqa: E402
-from ibr.render import Layer  # noqa: E402
-from ibr.view import View  # noqa: E402
+from ibr.render.rasterize import Layer  # noqa: E402
+from ibr.base.view import View  # noqa: E402
 from samples import DATA_DIR  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
@@ -161,7 +161,7 @@ def bench_pair(name, a, b, truths, repeats, quick):
 
 
 def bench_motorcycle(repeats):
-    from ibr.middlebury import motorcycle_views
+    from ibr.io.middlebury import motorcycle_views
 
     left, right = motorcycle_views()
     rows = []
@@ -233,8 +233,8 @@ def room_pair(width, height):
 
 
 def bench_sizes(sizes, repeats):
-    from ibr.camera import interpolate_cameras
-    from ibr.mesh import build_mesh
+    from ibr.base.camera import interpolate_cameras
+    from ibr.mesh.quad_mesh import build_mesh
 
     rows = []
     for w, h in sizes:

@@ -33,10 +33,10 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks._timing import median_seconds as median_time  # noqa: E402
 from ibr import synth  # noqa: E402
-from ibr.lens import RadialDistortion, distortion_maps, predistort  # noqa: E402
-from ibr.stereo import auto_stereo  # noqa: E402
-from ibr.stereo_pair import anaglyph, dubois_anaglyph, stereo_pair  # noqa: E402
-from ibr.timewarp import guard_band_camera, rotation_maps, upconvert, warp_rotation  # noqa: E402
+from ibr.stereo.lens import RadialDistortion, distortion_maps, predistort  # noqa: E402
+from ibr.stereo.stereo_camera import auto_stereo  # noqa: E402
+from ibr.stereo.pair import anaglyph, dubois_anaglyph, stereo_pair  # noqa: E402
+from ibr.stereo.timewarp import guard_band_camera, rotation_maps, upconvert, warp_rotation  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 DOCS = ROOT / "docs" / "img"

@@ -38,7 +38,7 @@ def run(args) -> int:
 
     from commands._common import info
     from ibr.io import read_image, write_image
-    from ibr.lens import RadialDistortion, predistort, predistort_stereo
+    from ibr.stereo.lens import RadialDistortion, predistort, predistort_stereo
 
     out = Path(args.out)
     if Path(args.image).resolve() == out.resolve():

@@ -151,7 +151,7 @@ def run(args) -> int:
     import numpy as np
 
     from commands._common import info, progress
-    from ibr.view_synthesis import iter_interpolate, source_mesh
+    from ibr.render.view_synthesis import iter_interpolate, source_mesh
     from ibr.io import atomic_path, load_view, write_image
 
     truth_paths = {}

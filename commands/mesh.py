@@ -39,7 +39,8 @@ def run(args) -> int:
 
     from commands._common import info
     from ibr.io import load_view, write_image
-    from ibr.mesh import build_mesh, write_obj, write_ply, write_segmentation_png
+    from ibr.mesh.quad_mesh import build_mesh
+    from ibr.io.mesh_files import write_obj, write_ply, write_segmentation_png
 
     for name in ("obj", "ply", "viz"):
         out = getattr(args, name)

@@ -49,8 +49,8 @@ def run(args) -> int:
         info("samples: no bundled synthetic views found in samples/data")
     if not args.no_middlebury:
         from ibr.io import save_view
-        from ibr.middlebury import MOTORCYCLE_CALIBRATION as C
-        from ibr.middlebury import motorcycle_views
+        from ibr.io.middlebury import MOTORCYCLE_CALIBRATION as C
+        from ibr.io.middlebury import motorcycle_views
 
         left, right = motorcycle_views()
         targets = [out / "motorcycle_left.json", out / "motorcycle_right.json"]

@@ -50,8 +50,8 @@ def run(args) -> int:
 
     from commands._common import info
     from ibr.io import load_view, write_image
-    from ibr.stereo import auto_stereo, comfort, max_interaxial_for_range
-    from ibr.stereo_pair import pack_stereo, stereo_pair
+    from ibr.stereo.stereo_camera import auto_stereo, comfort, max_interaxial_for_range
+    from ibr.stereo.pair import pack_stereo, stereo_pair
 
     out = Path(args.out)
     if not out.parent.is_dir() and str(out.parent):

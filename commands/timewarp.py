@@ -28,7 +28,7 @@ def load_cameras(path, display):
 
     import numpy as np
 
-    from ibr.camera import Camera
+    from ibr.base.camera import Camera
 
     p = Path(path)
     if not p.is_file():
@@ -59,7 +59,7 @@ def run(args) -> int:
     from commands._common import info, progress
     from commands.stereo import display_image
     from ibr.io import load_view, write_image
-    from ibr.timewarp import timewarp
+    from ibr.stereo.timewarp import timewarp
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():

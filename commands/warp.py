@@ -27,7 +27,7 @@ def load_camera(path):
     import json
     from pathlib import Path
 
-    from ibr.camera import Camera
+    from ibr.base.camera import Camera
     from ibr.io import load_view
 
     path = Path(path)
@@ -55,9 +55,9 @@ def run(args) -> int:
 
     from commands._common import info
     from commands.interpolate import _metrics, _to_float, _to_png
-    from ibr.view_synthesis import source_mesh, warp
+    from ibr.render.view_synthesis import source_mesh, warp
     from ibr.io import atomic_path, load_view, write_depth, write_image
-    from ibr.view import View
+    from ibr.base.view import View
 
     view = load_view(args.view)
     target = load_camera(args.to)

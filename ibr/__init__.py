@@ -5,51 +5,52 @@ viewpoints, two sources fill each other's holes. Conventions are in DESIGN.md se
 README: camera frame x right / y down / z forward, pixel centers at integer coordinates, planar
 depth in scene units with NaN where invalid.
 
-Public names are imported lazily so that ``import ibr`` stays fast.
+The stages live in subpackages (``docs/architecture.md``): :mod:`ibr.base` (cameras, depth
+encodings, views), :mod:`ibr.mesh` (segmentation, quad meshes), :mod:`ibr.render` (rasterizer,
+compositing, fill, view synthesis), :mod:`ibr.stereo` (stereo camera, pairs, lens, time-warp),
+:mod:`ibr.synth` (synthetic scenes) and :mod:`ibr.io` (files). Public names are imported lazily
+so that ``import ibr`` stays fast.
 """
 
 from __future__ import annotations
 
-import importlib
+from ._lazy import lazy_exports
 
 __version__ = "0.1.0"
 
 _EXPORTS = {
-    # camera.py
-    "Camera": "camera",
-    "look_at": "camera",
-    "interpolate_cameras": "camera",
-    "camera_from_gl_projection": "camera",
-    "gl_frustum_from_projection": "camera",
-    # view.py
-    "View": "view",
-    # io.py
-    "load_view": "io",
-    "save_view": "io",
-    "read_image": "io",
-    "write_image": "io",
-    "read_depth": "io",
-    "write_depth": "io",
-    # mesh.py / segment.py
-    "build_mesh": "mesh",
-    "QuadMesh": "mesh",
-    # view_synthesis.py
-    "warp": "view_synthesis",
-    "interpolate": "view_synthesis",
-    "Rendering": "view_synthesis",
+    "Camera": "base.camera",
+    "look_at": "base.camera",
+    "interpolate_cameras": "base.camera",
+    "camera_from_gl_projection": "base.camera",
+    "gl_frustum_from_projection": "base.camera",
+    "View": "base.view",
+    "load_view": "io.view_files",
+    "save_view": "io.view_files",
+    "read_image": "io.images",
+    "write_image": "io.images",
+    "read_depth": "io.images",
+    "write_depth": "io.images",
+    "build_mesh": "mesh.quad_mesh",
+    "QuadMesh": "mesh.quad_mesh",
+    "warp": "render.view_synthesis",
+    "interpolate": "render.view_synthesis",
+    "Rendering": "render.view_synthesis",
+    # Modules that were top-level before the stage layout (#9): ``ibr.depth``, ``ibr.lens`` ...
+    # keep working as attributes.
+    "camera": "base.camera.",
+    "depth": "base.depth.",
+    "view": "base.view.",
+    "middlebury": "io.middlebury.",
+    "segment": "mesh.segment.",
+    "composite": "render.composite.",
+    "fill": "render.fill.",
+    "forward": "render.forward.",
+    "view_synthesis": "render.view_synthesis.",
+    "stereo_pair": "stereo.pair.",
+    "lens": "stereo.lens.",
+    "timewarp": "stereo.timewarp.",
 }
 
-__all__ = sorted(_EXPORTS) + ["__version__"]
-
-
-def __getattr__(name: str):
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'ibr' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return __all__
+__getattr__, __dir__, _names = lazy_exports(__name__, _EXPORTS)
+__all__ = _names + ["__version__"]

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ibr._validate import check_choice, check_finite_scalar, check_image
+from ibr.base.validate import check_choice, check_finite_scalar, check_image
 
 from . import maps as _maps
 from .depth import face_ray_lengths, planar_from_range, range_from_planar

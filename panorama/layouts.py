@@ -41,7 +41,7 @@ from typing import Literal
 
 import numpy as np
 
-from ibr._validate import check_choice, check_image
+from ibr.base.validate import check_choice, check_image
 
 from .directions import FACE_FILE_NAMES, FACE_NAMES
 

@@ -23,7 +23,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ibr.camera import Camera
+from ibr.base.camera import Camera
 
 from .directions import (
     equirect_directions,

@@ -20,7 +20,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from ibr._validate import check_choice
+from ibr.base.validate import check_choice
 
 from .directions import WORLD_FROM_FACE, face_pixel_from_direction
 from .maps import SampleMap

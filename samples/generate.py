@@ -52,7 +52,7 @@ def render_sample_view(scene_name: str, t: float, *, width=WIDTH, height=HEIGHT,
     """The bundled view of ``scene_name`` at interpolation parameter ``t`` (color uint8)."""
     from ibr import interpolate_cameras
     from ibr.synth import make_scene, render, scene_cameras
-    from ibr.view import View
+    from ibr.base.view import View
 
     cam_a, cam_b = scene_cameras(scene_name, width=width, height=height)
     cam = cam_a if t == 0 else cam_b if t == 1 else interpolate_cameras(cam_a, cam_b, t)

@@ -11,15 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from ibr.camera import (
-    GL_FROM_CV,
-    Camera,
-    camera_from_gl_projection,
-    gl_frustum_from_projection,
-    interpolate_cameras,
-    look_at,
-)
-from ibr.depth import window_from_z
+from ibr.base.camera import GL_FROM_CV, Camera, camera_from_gl_projection, gl_frustum_from_projection, interpolate_cameras, look_at
+from ibr.base.depth import window_from_z
 
 HYP = settings(max_examples=60, deadline=None)
 

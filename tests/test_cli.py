@@ -59,7 +59,7 @@ def samples_dir(tmp_path_factory):
 
 
 def test_samples_writes_the_middlebury_pair(samples_dir):
-    from ibr.middlebury import motorcycle_views
+    from ibr.io.middlebury import motorcycle_views
 
     left, right = motorcycle_views()
     a, b = load_view(samples_dir / "motorcycle_left.json"), load_view(samples_dir / "motorcycle_right.json")

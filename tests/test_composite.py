@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ibr.camera import Camera, interpolate_cameras
-from ibr.composite import composite, viewpoint_weights
-from ibr.fill import fill_background, fill_previous
-from ibr.render import Layer
+from ibr.base.camera import Camera, interpolate_cameras
+from ibr.render.composite import composite, viewpoint_weights
+from ibr.render.fill import fill_background, fill_previous
+from ibr.render.rasterize import Layer
 
 
 def layer(color, depth):
@@ -120,8 +120,8 @@ def test_background_fill_reports_what_it_could_not_fill():
 
 def test_fused_sampling_matches_remap_then_composite():
     """sample_composite == composite(Layer(cv2.remap(...))) up to remap's 1/32-px rounding."""
-    from ibr.composite import sample_composite
-    from ibr.render import SourceMaps, sample_maps
+    from ibr.render.composite import sample_composite
+    from ibr.render.rasterize import SourceMaps, sample_maps
 
     rng = np.random.default_rng(3)
     h, w = 24, 32

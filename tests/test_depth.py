@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ibr import depth as D
-from ibr.camera import Camera
+from ibr.base import depth as D
+from ibr.base.camera import Camera
 
 HYP = settings(max_examples=80, deadline=None)
 finite = dict(allow_nan=False, allow_infinity=False)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ibr.camera import Camera
-from ibr.forward import forward_maps, forward_warp
-from ibr.view import View
+from ibr.base.camera import Camera
+from ibr.render.forward import forward_maps, forward_warp
+from ibr.base.view import View
 
 CAM = Camera.from_fov(40, 30, hfov_deg=60)
 

@@ -11,13 +11,13 @@ import pytest
 
 import cli
 import ibr
-from ibr.camera import Camera, look_at
-from ibr.view_synthesis import Rendering, interpolate, source_mesh, warp
+from ibr.base.camera import Camera, look_at
+from ibr.render.view_synthesis import Rendering, interpolate, source_mesh, warp
 from ibr.io import load_view, read_image, save_view
-from ibr.view import View
+from ibr.base.view import View
 from samples import DATA_DIR
 
-_interp_module = importlib.import_module("ibr.view_synthesis")
+_interp_module = importlib.import_module("ibr.render.view_synthesis")
 
 
 def psnr(a, b, mask=None) -> float:
@@ -34,7 +34,7 @@ def room():
 
 @pytest.fixture(scope="module")
 def motorcycle():
-    from ibr.middlebury import motorcycle_views
+    from ibr.io.middlebury import motorcycle_views
 
     return motorcycle_views()
 
@@ -240,7 +240,7 @@ def test_top_level_names_are_the_functions_whatever_was_imported_first():
     import subprocess
     import sys
 
-    code = ("import ibr.view_synthesis, ibr, types; "
+    code = ("import ibr.render.view_synthesis, ibr, types; "
             "assert isinstance(ibr.interpolate, types.FunctionType), ibr.interpolate; "
-            "assert ibr.warp is ibr.view_synthesis.warp and ibr.Rendering is ibr.view_synthesis.Rendering")
+            "assert ibr.warp is ibr.render.view_synthesis.warp and ibr.Rendering is ibr.render.view_synthesis.Rendering")
     subprocess.run([sys.executable, "-c", code], check=True)

@@ -12,21 +12,10 @@ import cv2
 import numpy as np
 import pytest
 
-from ibr import depth as D
-from ibr.camera import Camera
-from ibr.io import (
-    DEPTH_ENCODINGS,
-    atomic_path,
-    load_view,
-    read_depth,
-    read_image,
-    read_pfm,
-    save_view,
-    write_depth,
-    write_image,
-    write_pfm,
-)
-from ibr.view import View
+from ibr.base import depth as D
+from ibr.base.camera import Camera
+from ibr.io import DEPTH_ENCODINGS, atomic_path, load_view, read_depth, read_image, read_pfm, save_view, write_depth, write_image, write_pfm
+from ibr.base.view import View
 
 RNG = np.random.default_rng(7)
 
@@ -247,7 +236,7 @@ def test_save_view_failure_leaves_existing_files_untouched(tmp_path, monkeypatch
     view = make_view()
     save_view(view, tmp_path / "a.json")
     snapshot = {p: p.read_bytes() for p in tmp_path.iterdir()}
-    import ibr.io as io_mod
+    import ibr.io.view_files as io_mod
 
     def broken(*args, **kwargs):
         raise OSError("disk full")

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ibr.lens import RadialDistortion, distortion_maps, fit_radial, predistort, predistort_stereo
+from ibr.stereo.lens import RadialDistortion, distortion_maps, fit_radial, predistort, predistort_stereo
 
 LENSES = [RadialDistortion(0.22, 0.24, 1.5), RadialDistortion(-0.25, 0.05, 1.2), RadialDistortion(0.5, 0.0, 1.0)]
 

@@ -13,17 +13,11 @@ import pytest
 
 import cli
 from ibr import build_mesh, QuadMesh
-from ibr.camera import Camera
-from ibr.depth import fixed_from_z, z_from_fixed
-from ibr.mesh import (
-    fit_inv_depth_planes,
-    mesh_depth,
-    segmentation_image,
-    write_obj,
-    write_ply,
-    write_segmentation_png,
-)
-from ibr.view import View
+from ibr.base.camera import Camera
+from ibr.base.depth import fixed_from_z, z_from_fixed
+from ibr.mesh.quad_mesh import fit_inv_depth_planes, mesh_depth, segmentation_image
+from ibr.io.mesh_files import write_obj, write_ply, write_segmentation_png
+from ibr.base.view import View
 
 CAM = Camera.from_fov(48, 40, hfov_deg=70)
 
@@ -330,7 +324,7 @@ def test_error_bound_holds_on_random_scenes(seed):
 
 @pytest.fixture(scope="module")
 def motorcycle():
-    from ibr.middlebury import motorcycle_views
+    from ibr.io.middlebury import motorcycle_views
 
     return motorcycle_views()[0]
 

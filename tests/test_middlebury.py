@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from skimage.data import stereo_motorcycle
 
-from ibr.camera import Camera
-from ibr.middlebury import MOTORCYCLE_CALIBRATION as C
-from ibr.middlebury import motorcycle_cameras, motorcycle_disparity, motorcycle_views
+from ibr.base.camera import Camera
+from ibr.io.middlebury import MOTORCYCLE_CALIBRATION as C
+from ibr.io.middlebury import motorcycle_cameras, motorcycle_disparity, motorcycle_views
 
 
 @pytest.fixture(scope="module")
@@ -119,8 +119,8 @@ def test_no_global_subpixel_offset_and_pixel_center_shift_cancels(pair):
     """
     import dataclasses
 
-    from ibr.view_synthesis import warp
-    from ibr.view import View
+    from ibr.render.view_synthesis import warp
+    from ibr.base.view import View
 
     left, right, _ = pair
 
@@ -140,7 +140,7 @@ def test_no_global_subpixel_offset_and_pixel_center_shift_cancels(pair):
 
 
 def test_snap_mixed_disparity_on_a_step_edge():
-    from ibr.middlebury import snap_mixed_disparity
+    from ibr.io.middlebury import snap_mixed_disparity
 
     disp = np.tile(np.array([10, 10, 10, 30, 30, 30, 30], np.float64), (5, 1))
     color = np.zeros((5, 7, 3), np.uint8)
@@ -171,7 +171,7 @@ def test_snapping_mixed_disparities_improves_the_warp_and_the_margin_over_warpfr
     Measured: mesh 27.46 -> 27.76 dB, cv2.warpFrame (exact doffs) 25.43 -> 25.50 dB, margin
     +2.03 -> +2.26 dB, coverage 83.4/82.9% -> 83.5/83.0%. Thresholds: measured minus 0.2 dB.
     """
-    from ibr.view_synthesis import warp
+    from ibr.render.view_synthesis import warp
 
     def psnr(a, b, mask):
         d = (a.astype(np.float64) - b.astype(np.float64))[mask]

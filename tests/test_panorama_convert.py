@@ -335,7 +335,7 @@ def test_direction_pixel_round_trips_hypothesis():
 def test_c2e_and_perspective_match_ground_truth_renders():
     """Cube-face renders converted to equirect and to a pinhole view agree with direct renders of
     the same scene (ibr.synth.render for the view: checks yaw/pitch/roll against ibr.Camera)."""
-    from ibr.camera import Camera
+    from ibr.base.camera import Camera
     from ibr.synth import make_scene, render, scene_cameras
     from panorama.synth import render_cubemap, render_equirect
     scene = make_scene("room")

@@ -12,10 +12,10 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from ibr import synth
-from ibr.camera import Camera, look_at
-from ibr.mesh import QuadMesh, build_mesh
-from ibr.render import Layer, rasterize_mesh, rasterize_mesh_reference, render_mesh
-from ibr.view import View
+from ibr.base.camera import Camera, look_at
+from ibr.mesh.quad_mesh import QuadMesh, build_mesh
+from ibr.render.rasterize import Layer, rasterize_mesh, rasterize_mesh_reference, render_mesh
+from ibr.base.view import View
 
 
 # ----------------------------------------------------------------------------- helpers

@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ibr import _segment_kernels as K
-from ibr import segment as S
-from ibr.camera import Camera
-from ibr.depth import zprime_from_z
+from ibr.mesh import _segment_kernels as K
+from ibr.mesh import segment as S
+from ibr.base.camera import Camera
+from ibr.base.depth import zprime_from_z
 
 CAM = Camera.from_fov(48, 40, hfov_deg=70)
 

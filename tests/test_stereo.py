@@ -8,38 +8,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ibr import synth
-from ibr._stereo_pair import (
-    fill_rows_background,
-    fill_rows_background_reference,
-    scanline_warp,
-    scanline_warp_reference,
-)
-from ibr.camera import Camera, gl_frustum_from_projection
-from ibr.depth import window_from_z
-from ibr.stereo import (
-    StereoCamera,
-    auto_stereo,
-    comfort,
-    interaxial_for_parallax,
-    max_interaxial,
-    max_interaxial_for_range,
-    parallax_angle_deg,
-    parallax_px,
-    parallax_scene,
-)
-from ibr.fill import fill_background_rows
-from ibr.stereo_pair import (
-    DUBOIS_RED_CYAN_LEFT,
-    DUBOIS_RED_CYAN_RIGHT,
-    anaglyph,
-    dubois_anaglyph,
-    map_pixels,
-    pack_stereo,
-    stereo_cameras,
-    stereo_pair,
-    stereo_pair_from_zbuffer,
-)
-from ibr.view import View
+from ibr.render._fill_kernels import fill_rows_background, fill_rows_background_reference
+from ibr.stereo._pair_kernels import scanline_warp, scanline_warp_reference
+from ibr.base.camera import Camera, gl_frustum_from_projection
+from ibr.base.depth import window_from_z
+from ibr.stereo.stereo_camera import StereoCamera, auto_stereo, comfort, interaxial_for_parallax, max_interaxial, max_interaxial_for_range, parallax_angle_deg, parallax_px, parallax_scene
+from ibr.render.fill import fill_background_rows
+from ibr.stereo.pair import DUBOIS_RED_CYAN_LEFT, DUBOIS_RED_CYAN_RIGHT, anaglyph, dubois_anaglyph, map_pixels, pack_stereo, stereo_cameras, stereo_pair, stereo_pair_from_zbuffer
+from ibr.base.view import View
 
 
 def table1_camera(**kw) -> StereoCamera:

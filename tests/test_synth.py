@@ -10,22 +10,9 @@ import numpy as np
 import pytest
 
 from ibr import interpolate_cameras, look_at
-from ibr.camera import Camera
-from ibr.synth import (
-    SCENES,
-    Box,
-    ImageTexture,
-    Rect,
-    Scene,
-    Sphere,
-    make_scene,
-    render,
-    render_rays,
-    rotation,
-    scene_cameras,
-    staircase,
-)
-from ibr._synth_texture import sample_bilinear
+from ibr.base.camera import Camera
+from ibr.synth import SCENES, Box, ImageTexture, Rect, Scene, Sphere, make_scene, render, render_rays, rotation, scene_cameras, staircase
+from ibr.synth.textures import sample_bilinear
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "samples" / "data"

@@ -7,15 +7,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from ibr import synth
-from ibr.camera import Camera
-from ibr.timewarp import (
-    guard_band_camera,
-    rotation_homography,
-    timewarp,
-    upconvert,
-    warp_rotation,
-)
-from ibr.view import View
+from ibr.base.camera import Camera
+from ibr.stereo.timewarp import guard_band_camera, rotation_homography, timewarp, upconvert, warp_rotation
+from ibr.base.view import View
 
 
 def _rotated(cam: Camera, yaw=0.0, pitch=0.0, roll=0.0) -> Camera:

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ibr import synth
-from ibr._validate import check_near_far, check_unit_vector
+from ibr.base.validate import check_near_far, check_unit_vector
 
 
 def test_unit_vector_is_normalized_and_degenerate_vectors_are_named():
@@ -26,7 +26,7 @@ def test_near_far_order_and_infinite_far():
 
 
 def test_callers_report_the_zero_vector_by_its_argument_name():
-    from ibr.stereo import StereoCamera
+    from ibr.stereo.stereo_camera import StereoCamera
 
     with pytest.raises(ValueError, match="view_dir: expected a finite non-zero 3-vector"):
         StereoCamera(position=(0, 0, 0), view_dir=(0, 0, 0), up=(0, -1, 0), interaxial=0.1,

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from ._validate import check_array, check_finite_scalar, check_near_far, check_positive
+from .validate import check_array, check_finite_scalar, check_near_far, check_positive
 
 __all__ = [
     "Camera",

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import check_array, check_finite_scalar, check_near_far as _near_far, check_positive
+from .validate import check_array, check_finite_scalar, check_near_far as _near_far, check_positive
 
 __all__ = [
     "disparity_from_z",

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_image
+from .validate import check_image
 from .camera import Camera
 
 __all__ = ["View"]

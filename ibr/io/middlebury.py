@@ -31,9 +31,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .camera import Camera
-from .depth import z_from_disparity
-from .view import View
+from ..base.camera import Camera
+from ..base.depth import z_from_disparity
+from ..base.view import View
 
 __all__ = [
     "MOTORCYCLE_CALIBRATION",

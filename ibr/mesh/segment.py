@@ -46,8 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _segment_kernels as _k
-from ._validate import check_array, check_choice, check_positive
-from .depth import ZPRIME_SCALE, zprime_from_z
+from ..base.validate import check_array, check_choice, check_positive
+from ..base.depth import ZPRIME_SCALE, zprime_from_z
 
 __all__ = [
     "METHODS",

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _render_kernels as _k
-from ._validate import check_choice, check_positive
-from .camera import Camera
-from .render import Layer
+from . import _composite_kernels as _k
+from ..base.validate import check_choice, check_positive
+from ..base.camera import Camera
+from .rasterize import Layer
 
 __all__ = ["COMPOSITE_MODES", "Composite", "composite", "sample_composite", "viewpoint_weights"]
 

@@ -19,9 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _render_kernels as _k
-from . import _stereo_pair as _rows
-from ._validate import check_array, check_image, check_positive
+from . import _fill_kernels as _k
+from ..base.validate import check_array, check_image, check_positive
 
 __all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous"]
 
@@ -134,5 +133,5 @@ def fill_background_rows(color, depth, coverage) -> tuple[np.ndarray, np.ndarray
     cov = check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b")
     d[~cov] = np.nan
     holes = np.zeros(cov.shape, np.bool_)
-    _rows.fill_rows_background(col, d, np.ascontiguousarray(cov), holes)
+    _k.fill_rows_background(col, d, np.ascontiguousarray(cov), holes)
     return col, d, holes

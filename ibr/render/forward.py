@@ -24,10 +24,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _render_kernels as _k
-from ._validate import check_choice
-from .camera import Camera
-from .render import _FAR, Layer, SourceMaps, _intrinsics, as_float_color, sample_maps
+from . import _forward_kernels as _k
+from ..base.validate import check_choice
+from ..base.camera import Camera
+from .rasterize import _FAR, Layer, SourceMaps, _intrinsics, as_float_color, sample_maps
 
 __all__ = ["SPLATS", "forward_maps", "forward_warp"]
 

@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from . import _render_kernels as _k
-from ._validate import check_choice, check_image, check_positive
-from .camera import Camera
+from . import _raster_kernels as _k
+from ..base.validate import check_choice, check_image, check_positive
+from ..base.camera import Camera
 
 __all__ = ["FOOTPRINTS", "INTERPOLATIONS", "Layer", "SourceMaps", "rasterize_mesh", "render_mesh", "sample_maps"]
 
@@ -271,7 +271,7 @@ def render_mesh(
     """Render a source's quad mesh into a target camera (inverse warp with a z-buffer).
 
     Every target pixel center is traced to the nearest quad by the quad's exact homography
-    (``ibr._render_kernels`` derives it: ``1/z_t = g.p``, source pixel ``Hp / (Hp)_z``), so planar
+    (``ibr.render._raster_kernels`` derives it: ``1/z_t = g.p``, source pixel ``Hp / (Hp)_z``), so planar
     surfaces show no texture drift and the depth is the plane's, exactly. Quads whose plane faces
     away from the target camera are culled; quads crossing the target camera plane are cut there
     (only hits in front of both cameras count), never smeared.

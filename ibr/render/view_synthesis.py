@@ -21,12 +21,12 @@ from typing import Iterator, Sequence
 
 import numpy as np
 
-from ._validate import check_choice, check_finite_scalar, check_positive
-from .camera import Camera, interpolate_cameras
+from ..base.validate import check_choice, check_finite_scalar, check_positive
+from ..base.camera import Camera, interpolate_cameras
 from .composite import COMPOSITE_MODES, composite, sample_composite, viewpoint_weights
 from .fill import FILLS, _fill_background_inplace
-from .render import FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_into, as_float_color, sample_maps, scratch, scratch_maps
-from .view import View
+from .rasterize import FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_into, as_float_color, sample_maps, scratch, scratch_maps
+from ..base.view import View
 
 __all__ = [
     "METHODS",
@@ -125,7 +125,7 @@ def source_mesh(view: View, **mesh_options):
     key = tuple(sorted(mesh_options.items()))
     mesh = src.meshes.get(key)
     if mesh is None:
-        from .mesh import build_mesh
+        from ..mesh import build_mesh
 
         mesh = build_mesh(view, **mesh_options)
         src.meshes[key] = mesh

@@ -116,39 +116,6 @@ def point_splat(color, z, fx, fy, cx, cy, dx, dz, dpixel, out_color, out_depth, 
                     out_color[k, j, c] = color[v, u, c]
 
 
-@njit(cache=True, parallel=True)
-def fill_rows_background(color, depth, cov, out_holes):
-    """Fill each uncovered run of a row with the deeper of its two covered neighbours
-    (the background side); a run touching the image border takes its only neighbour.
-    Runs with no covered pixel in the row stay 0 / NaN. In place; marks ``out_holes``."""
-    h, w, nc = color.shape
-    for v in prange(h):
-        j = 0
-        while j < w:
-            if cov[v, j]:
-                j += 1
-                continue
-            a = j
-            while j < w and not cov[v, j]:
-                j += 1
-            b = j  # run is [a, b)
-            left = a - 1
-            right = b if b < w else -1
-            src = -1
-            if left >= 0 and right >= 0:
-                src = left if depth[v, left] >= depth[v, right] else right
-            elif left >= 0:
-                src = left
-            elif right >= 0:
-                src = right
-            for k in range(a, b):
-                out_holes[v, k] = True
-                if src >= 0:
-                    depth[v, k] = depth[v, src]
-                    for c in range(nc):
-                        color[v, k, c] = color[v, src, c]
-
-
 # ---------------------------------------------------------------------- references
 def scanline_warp_reference(color, z, fx, dx, dpixel, max_jump_px):
     """numpy reference of :func:`scanline_warp`: per row, every candidate (segment or half
@@ -197,28 +164,3 @@ def scanline_warp_reference(color, z, fx, dx, dpixel, max_jump_px):
         out_c[v, hit] = col[hit]
         cov[v] = hit
     return out_c, out_z, cov
-
-
-def fill_rows_background_reference(color, depth, cov):
-    """numpy reference of :func:`fill_rows_background` (returns copies and the hole mask)."""
-    color = color.copy()
-    depth = depth.copy()
-    holes = np.zeros(cov.shape, bool)
-    h, w = cov.shape
-    for v in range(h):
-        covered = np.flatnonzero(cov[v])
-        for k in np.flatnonzero(~cov[v]):
-            holes[v, k] = True
-            left = covered[covered < k]
-            right = covered[covered > k]
-            cand = []
-            if left.size:
-                cand.append(left[-1])
-            if right.size:
-                cand.append(right[0])
-            if not cand:
-                continue
-            src = cand[0] if len(cand) == 1 or depth[v, cand[0]] >= depth[v, cand[1]] else cand[1]
-            color[v, k] = color[v, src]
-            depth[v, k] = depth[v, src]
-    return color, depth, holes

@@ -39,7 +39,7 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from ._validate import check_array, check_choice, check_finite_scalar, check_image, check_positive
+from ..base.validate import check_array, check_choice, check_finite_scalar, check_image, check_positive
 
 __all__ = [
     "RadialDistortion",

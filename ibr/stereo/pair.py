@@ -13,7 +13,7 @@ vertical parallax is exactly zero; Dpixel = +/- fx e / (2 f) is the asymmetric-f
 seed 000 that puts the zero-parallax plane at distance f.
 
 Method 2 here maps rows with linear interpolation between connected neighbours (inverse depth and
-color; see :mod:`ibr._stereo_pair`), which avoids the cracks of copying single pixels;
+color; see :mod:`ibr.stereo._pair_kernels`), which avoids the cracks of copying single pixels;
 ``method="splat"`` is the literal per-pixel copy (rounded to the nearest pixel, z-buffered) and
 also supports Dz != 0. Disocclusions are filled per row from the background side (the deeper of
 the two neighbours of a hole run) and reported as masks.
@@ -33,10 +33,11 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from . import _stereo_pair as _k
-from ._validate import check_array, check_choice, check_finite_scalar, check_image, check_positive
-from .camera import Camera, camera_from_gl_projection
-from .view import View
+from . import _pair_kernels as _k
+from ..render import _fill_kernels as _fill_k
+from ..base.validate import check_array, check_choice, check_finite_scalar, check_image, check_positive
+from ..base.camera import Camera, camera_from_gl_projection
+from ..base.view import View
 
 __all__ = [
     "PACK_MODES",
@@ -166,7 +167,7 @@ def _to_dtype(img: np.ndarray, dtype) -> np.ndarray:
 def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, mesh=None):
     src = view.camera
     if method == "mesh":
-        from .render import render_mesh
+        from ..render.rasterize import render_mesh
 
         layer = render_mesh(mesh, view.color, eye_cam)
         return layer.color, layer.depth, layer.coverage
@@ -213,7 +214,7 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
     left_cam, right_cam = stereo_cameras(view.camera, e=e, f=f, source=source)
     mesh = None
     if method == "mesh":
-        from .mesh import build_mesh
+        from ..mesh.quad_mesh import build_mesh
 
         mesh = build_mesh(view, **(mesh_options or {}))  # one mesh serves both eyes
     out = {}
@@ -226,7 +227,7 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
         c = np.ascontiguousarray(c[..., None] if c.ndim == 2 else c, dtype=np.float32)
         d = np.ascontiguousarray(d, dtype=np.float32)
         holes = np.zeros(cov.shape, np.bool_)
-        _k.fill_rows_background(c, d, np.ascontiguousarray(cov), holes)  # in place (fresh arrays)
+        _fill_k.fill_rows_background(c, d, np.ascontiguousarray(cov), holes)  # in place (fresh arrays)
         out[eye] = (_to_dtype(c, np.asarray(view.color).dtype), d, holes)
     return StereoPair(out["left"][0], out["right"][0], out["left"][2], out["right"][2],
                       out["left"][1], out["right"][1], left_cam, right_cam)
@@ -243,7 +244,7 @@ def stereo_pair_from_zbuffer(color, zbuffer, projection, *, e: float, f: float, 
     ``z = n f / (f - w (f - n))`` (:func:`ibr.depth.z_from_window`; seed 003's printed inverse is
     wrong). With ``far_is_empty`` the cleared value w = 1 is treated as no depth.
     """
-    from .depth import z_from_window
+    from ..base.depth import z_from_window
 
     col = check_image("color", color)
     w_buf = check_array("zbuffer", zbuffer, ndim=2, dtype_kind="f")

@@ -34,8 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_array, check_choice, check_finite_scalar, check_positive, check_unit_vector as _unit
-from .camera import Camera, GLFrustum, camera_from_gl_projection
+from ..base.validate import check_array, check_choice, check_finite_scalar, check_positive, check_unit_vector as _unit
+from ..base.camera import Camera, GLFrustum, camera_from_gl_projection
 
 __all__ = [
     "ComfortReport",

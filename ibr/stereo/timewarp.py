@@ -28,9 +28,9 @@ from typing import Callable, Sequence
 import cv2
 import numpy as np
 
-from ._validate import check_choice, check_image
-from .camera import Camera
-from .view import View
+from ..base.validate import check_choice, check_image
+from ..base.camera import Camera
+from ..base.view import View
 
 __all__ = [
     "TimewarpFrame",
@@ -141,7 +141,7 @@ def warp_rotation(color, src: Camera, dst: Camera, *, ignore_translation: bool =
 
 
 def _depth_warp(view: View, dst: Camera) -> TimewarpFrame:
-    from .view_synthesis import warp  # the renderer: quad mesh + z-buffer + background hole fill
+    from ..render.view_synthesis import warp  # the renderer: quad mesh + z-buffer + background hole fill
 
     res = warp(view, dst)
     color = np.asarray(res.color)

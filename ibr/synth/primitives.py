@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._synth_texture import ImageTexture
+from .textures import ImageTexture
 
 __all__ = ["Primitive", "Rect", "Box", "Sphere", "T_MIN", "rotation"]
 

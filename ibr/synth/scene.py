@@ -31,31 +31,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ._synth_prims import Box, Primitive, Rect, Sphere, mat3, rotation
-from ._synth_scenes import SCENES, build_scene, camera_poses, make_staircase
-from ._synth_texture import TEXTURE_NAMES, ImageTexture, checker_texture, image_texture
-from ._validate import check_array, check_unit_vector as _unit
-from .camera import Camera
-from .view import View
+from .primitives import Primitive, mat3
+from ..base.camera import Camera
+from ..base.validate import check_array, check_unit_vector as _unit
+from ..base.view import View
 
-__all__ = [
-    "Box",
-    "Hit",
-    "ImageTexture",
-    "Rect",
-    "SCENES",
-    "Scene",
-    "Sphere",
-    "TEXTURE_NAMES",
-    "checker_texture",
-    "image_texture",
-    "make_scene",
-    "render",
-    "render_rays",
-    "rotation",
-    "scene_cameras",
-    "staircase",
-]
+__all__ = ["Hit", "Scene", "render", "render_rays"]
 
 _CHUNK = 1 << 17  # rays per batch: bounds memory (~50 MB of temporaries) without slowing numpy
 
@@ -308,51 +289,3 @@ def render(scene: Scene, camera: Camera, *, supersample: int = 1, name: str | No
                 acc += scene.trace(origin, _camera_dirs(camera, du, dv)).color
         color = (acc / (k * k)).astype(np.float32)
     return View(color.reshape(h, w, 3), depth.reshape(h, w), camera, scene.name if name is None else name)
-
-
-# ---------------------------------------------------------------------- named scenes
-def staircase(
-    *,
-    origin,
-    steps: int,
-    step_width: float,
-    step_rise: float,
-    step_run: float,
-    depth: float | None = None,
-    texture: ImageTexture,
-    yaw_deg: float = 0.0,
-) -> list[Box]:
-    """Boxes forming a staircase that rises (toward -y, world up) as it runs along local +z.
-
-    ``origin`` is the floor point at the front-left corner of the first step (world coordinates);
-    step i spans local z in [i*run, run*steps if depth is None else depth] and rises to
-    (i+1)*rise above the floor. ``yaw_deg`` turns the whole staircase about the vertical.
-    """
-    return make_staircase(origin=origin, steps=steps, step_width=step_width, step_rise=step_rise,
-                          step_run=step_run, depth=depth, texture=texture, yaw_deg=yaw_deg)
-
-
-def make_scene(name: str, *, specular: float = 0.0) -> Scene:
-    """Build a named scene (see ``SCENES`` for names and descriptions).
-
-    ``specular > 0`` switches on the view-dependent Blinn-Phong highlight.
-    """
-    if not isinstance(name, str) or name not in SCENES:
-        raise ValueError(f"name: unknown scene {name!r}; expected one of {', '.join(map(repr, SCENES))}")
-    scene = build_scene(name)
-    return scene.with_specular(specular) if specular > 0 else scene
-
-
-def scene_cameras(name: str, *, width: int = 512, height: int = 384) -> tuple[Camera, Camera]:
-    """The bundled source pair ``(cam_a, cam_b)`` of a named scene.
-
-    Ground-truth intermediate cameras are ``ibr.interpolate_cameras(cam_a, cam_b, t)``.
-    Both cameras share one field of view (60 degrees horizontal) and a centered principal point
-    (``cx = (width - 1) / 2``, pixel-center convention).
-    """
-    if not isinstance(name, str) or name not in SCENES:
-        raise ValueError(f"name: unknown scene {name!r}; expected one of {', '.join(map(repr, SCENES))}")
-    pose_a, pose_b, hfov = camera_poses(name)
-    return (Camera.from_fov(width, height, hfov_deg=hfov, world_from_cam=pose_a),
-            Camera.from_fov(width, height, hfov_deg=hfov, world_from_cam=pose_b))
-

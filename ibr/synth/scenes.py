@@ -1,4 +1,4 @@
-"""The named synthetic scenes and their bundled camera pairs (used through ``ibr.synth``).
+"""The named synthetic scenes and their bundled camera pairs (used through :mod:`ibr.synth`).
 
 World frame: x right, y *down* (world up is -y), z forward from the default viewpoint; units are
 "scene units" (think meters). Every scene is fixed (no randomness), so renders are
@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._synth_prims import Box, Rect, Sphere, rotation
-from ._synth_texture import checker_texture, image_texture
-from .camera import look_at
+from ..base.camera import Camera, look_at
+from .primitives import Box, Rect, Sphere, rotation
+from .scene import Scene
+from .textures import ImageTexture, checker_texture, image_texture
 
-__all__ = ["SCENES", "build_scene", "camera_poses", "make_staircase"]
+__all__ = ["SCENES", "build_scene", "camera_poses", "make_scene", "make_staircase", "scene_cameras", "staircase"]
 
 SCENES = {
     "room": "closed room of textured planes (floor, ceiling, 4 walls), two boxes and a staircase",
@@ -152,7 +153,6 @@ _CAMERAS = {
 
 
 def build_scene(name: str):
-    from .synth import Scene
 
     return Scene(tuple(_BUILDERS[name]()), name=name)
 
@@ -161,3 +161,50 @@ def camera_poses(name: str):
     """``(world_from_cam_a, world_from_cam_b, hfov_deg)`` of a named scene."""
     eye_a, eye_b, target, hfov = _CAMERAS[name]
     return look_at(eye_a, target), look_at(eye_b, target), hfov
+
+
+def staircase(
+    *,
+    origin,
+    steps: int,
+    step_width: float,
+    step_rise: float,
+    step_run: float,
+    depth: float | None = None,
+    texture: ImageTexture,
+    yaw_deg: float = 0.0,
+) -> list[Box]:
+    """Boxes forming a staircase that rises (toward -y, world up) as it runs along local +z.
+
+    ``origin`` is the floor point at the front-left corner of the first step (world coordinates);
+    step i spans local z in [i*run, run*steps if depth is None else depth] and rises to
+    (i+1)*rise above the floor. ``yaw_deg`` turns the whole staircase about the vertical.
+    """
+    return make_staircase(origin=origin, steps=steps, step_width=step_width, step_rise=step_rise,
+                          step_run=step_run, depth=depth, texture=texture, yaw_deg=yaw_deg)
+
+
+def make_scene(name: str, *, specular: float = 0.0) -> Scene:
+    """Build a named scene (see ``SCENES`` for names and descriptions).
+
+    ``specular > 0`` switches on the view-dependent Blinn-Phong highlight.
+    """
+    if not isinstance(name, str) or name not in SCENES:
+        raise ValueError(f"name: unknown scene {name!r}; expected one of {', '.join(map(repr, SCENES))}")
+    scene = build_scene(name)
+    return scene.with_specular(specular) if specular > 0 else scene
+
+
+def scene_cameras(name: str, *, width: int = 512, height: int = 384) -> tuple[Camera, Camera]:
+    """The bundled source pair ``(cam_a, cam_b)`` of a named scene.
+
+    Ground-truth intermediate cameras are ``ibr.interpolate_cameras(cam_a, cam_b, t)``.
+    Both cameras share one field of view (60 degrees horizontal) and a centered principal point
+    (``cx = (width - 1) / 2``, pixel-center convention).
+    """
+    if not isinstance(name, str) or name not in SCENES:
+        raise ValueError(f"name: unknown scene {name!r}; expected one of {', '.join(map(repr, SCENES))}")
+    pose_a, pose_b, hfov = camera_poses(name)
+    return (Camera.from_fov(width, height, hfov_deg=hfov, world_from_cam=pose_a),
+            Camera.from_fov(width, height, hfov_deg=hfov, world_from_cam=pose_b))
+

@@ -1,0 +1,342 @@
+"""The view file: one JSON sidecar that makes one path describe one RGB-D view.
+
+::
+
+    {"format": "ibr-view", "version": 1, "name": "room_a",
+     "color": "room_a_color.png",
+     "depth": {"path": "room_a_depth.exr", "encoding": "z"},
+     "camera": {"width": 256, "height": 192, "fx": 200.0, "fy": 200.0,
+                "cx": 127.5, "cy": 95.5, "world_from_cam": [[1, 0, 0, 0], ...]}}
+
+Paths are relative to the JSON file. ``depth`` may be ``null`` (color and camera only).
+Pixel convention of ``camera``: pixel (u, v) = (column, row) has its center at integer
+coordinates, so a centered principal point of a 256-wide image is ``cx = 127.5``.
+:func:`load_view` converts every supported depth encoding (:data:`DEPTH_ENCODINGS`) to planar z
+(float32, NaN invalid) with :mod:`ibr.base.depth`. The full schema is in ``docs/files.md``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..base import depth as _depth
+from ..base.camera import Camera
+from ..base.view import View
+from .images import _check_write_dtype, _require_file, atomic_path, read_depth, read_image, write_depth, write_image
+
+__all__ = ["DEPTH_ENCODINGS", "VIEW_FORMAT", "VIEW_VERSION", "load_view", "save_view", "view_to_dict"]
+
+VIEW_FORMAT = "ibr-view"
+VIEW_VERSION = 1
+
+#: Depth encodings of a view file: required and optional parameters of each.
+#: ``scale`` (optional everywhere except the fixed-point codes) multiplies the stored values;
+#: it is required for integer files such as 16-bit PNG. See :mod:`ibr.depth` for the formulas.
+DEPTH_ENCODINGS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "z": ((), ("scale",)),
+    "range": ((), ("scale",)),
+    "disparity": (("baseline", "focal_px", "doffs"), ("scale",)),
+    "window": (("near", "far"), ()),
+    "reversed": (("near", "far"), ()),
+    "zprime": (("near", "far"), ()),
+    "fixed16": (("near", "far"), ("far_is_empty",)),
+    "fixed24": (("near", "far"), ("far_is_empty",)),
+}
+
+_FIXED_BITS = {"fixed16": 16, "fixed24": 24}
+
+
+# --------------------------------------------------------------------------- view files
+def _param(params: dict, key: str, where: str, *, allow_inf: bool = False) -> float:
+    value = params[key]
+    if allow_inf and (value == math.inf or (isinstance(value, str) and value.lower() in ("inf", "infinity"))):
+        return math.inf  # JSON has no inf: accept "inf" (what save_view writes) or Python's Infinity
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{where}: parameter {key!r} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _check_depth_params(encoding, params: dict, where: str) -> dict:
+    if encoding not in DEPTH_ENCODINGS:
+        raise ValueError(f"{where}: unknown depth encoding {encoding!r}; expected one of "
+                         f"{', '.join(map(repr, DEPTH_ENCODINGS))}")
+    required, optional = DEPTH_ENCODINGS[encoding]
+    missing = [k for k in required if k not in params]
+    if missing:
+        raise ValueError(f"{where}: encoding {encoding!r} needs parameter(s) {', '.join(missing)}")
+    unknown = sorted(set(params) - set(required) - set(optional))
+    if unknown:
+        raise ValueError(f"{where}: unknown parameter(s) {', '.join(unknown)} for encoding {encoding!r} "
+                         f"(allowed: {', '.join(required + optional) or 'none'})")
+    out: dict[str, Any] = {}
+    for k in required + optional:
+        if k not in params:
+            continue
+        if k == "far_is_empty":
+            if not isinstance(params[k], bool):
+                raise ValueError(f"{where}: parameter 'far_is_empty' must be true or false, got {params[k]!r}")
+            out[k] = params[k]
+        else:
+            out[k] = _param(params, k, where, allow_inf=(k == "far"))
+    if "near" in out:
+        if not out["near"] > 0 or not out["far"] > out["near"]:
+            raise ValueError(f"{where}: need 0 < near < far, got near={out['near']}, far={out['far']}")
+        if encoding in _FIXED_BITS and math.isinf(out["far"]):
+            raise ValueError(f"{where}: encoding {encoding!r} needs a finite far plane")
+    for k in ("baseline", "focal_px", "scale"):
+        if k in out and not out[k] > 0:
+            raise ValueError(f"{where}: parameter {k!r} must be positive, got {out[k]}")
+    return out
+
+
+def _decode_depth(stored: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.ndarray:
+    """Stored depth values -> planar z (float32, NaN invalid)."""
+    if encoding == "z":
+        return stored
+    if encoding == "range":
+        return _depth.z_from_range(stored, camera)
+    if encoding == "disparity":
+        return _depth.z_from_disparity(stored, baseline=p["baseline"], focal_px=p["focal_px"], doffs=p["doffs"])
+    nf = {"near": p["near"], "far": p["far"]}
+    if encoding == "window":
+        return _depth.z_from_window(stored, **nf)
+    if encoding == "reversed":
+        return _depth.z_from_reversed(stored, **nf)
+    if encoding == "zprime":
+        return _depth.z_from_zprime(stored, **nf)
+    bits = _FIXED_BITS[encoding]
+    return _depth.z_from_fixed(stored, bits=bits, far_is_empty=p.get("far_is_empty", True), **nf)
+
+
+def _encode_depth(z: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.ndarray:
+    """Planar z -> values to store (float32, or integer codes for the fixed encodings)."""
+    if encoding == "z":
+        return z.astype(np.float32)
+    if encoding == "range":
+        return _depth.range_from_z(z, camera)
+    if encoding == "disparity":
+        return _depth.disparity_from_z(z, baseline=p["baseline"], focal_px=p["focal_px"], doffs=p["doffs"])
+    nf = {"near": p["near"], "far": p["far"]}
+    valid = _depth.valid_mask(z)
+    if encoding in _FIXED_BITS or encoding in ("window", "zprime"):
+        with np.errstate(invalid="ignore"):
+            outside = valid & ((z < nf["near"]) | (z > nf["far"]))
+        if outside.any():
+            raise ValueError(f"depth: {int(outside.sum())} valid pixel(s) lie outside [near, far] = "
+                             f"[{nf['near']}, {nf['far']}] and cannot be stored as {encoding!r}")
+    if encoding == "window":
+        return _depth.window_from_z(z, **nf).astype(np.float32)
+    if encoding == "reversed":
+        return _depth.reversed_from_z(z, **nf).astype(np.float32)
+    if encoding == "zprime":
+        return _depth.zprime_from_z(z, **nf).astype(np.float32)
+    bits = _FIXED_BITS[encoding]
+    q = _depth.fixed_from_z(z, bits=bits, **nf)
+    if p.get("far_is_empty", True) and np.any(valid & (q == 2**bits - 1)):
+        raise ValueError(f"depth: valid pixels quantize to the far code of a {bits}-bit buffer, which "
+                         f"reads back as empty; move far out or set far_is_empty=false")
+    return q
+
+
+def _read_stored_depth(path: Path, encoding: str, p: dict, where: str) -> np.ndarray:
+    if encoding in _FIXED_BITS:
+        raw = read_image(path, what=where)
+        if raw.ndim != 2:
+            raise ValueError(f"{where}: expected a single-channel depth image, {path} has {raw.shape[2]} channels")
+        if raw.dtype.kind == "f":  # codes stored in a float file must be integers
+            if not np.all(np.isfinite(raw) & (raw == np.rint(raw)) & (raw >= 0)):
+                raise ValueError(f"{where}: {path} must hold non-negative integer codes for {encoding!r}")
+            raw = raw.astype(np.uint32)
+        return raw
+    return read_depth(path, scale=p.get("scale"), what=where)
+
+
+def _json_number(x: float):
+    return "inf" if isinstance(x, float) and math.isinf(x) else x
+
+
+def load_view(path) -> View:
+    """Load a view file (JSON sidecar + color + optional depth) as a :class:`~ibr.view.View`.
+
+    Depth of any encoding in :data:`DEPTH_ENCODINGS` is converted to planar z (float32, NaN
+    where invalid). The camera uses the pixel-center convention (pixel (u, v) has its center at
+    integer coordinates; a centered cx of a 741-wide image is 370.0).
+
+    Raises
+    ------
+    FileNotFoundError
+        The JSON file, or a file it references (the message names the key: ``color`` or
+        ``depth.path``), does not exist.
+    ValueError
+        Invalid JSON or schema, unknown encoding, missing or bad parameters, corrupt images,
+        color/depth size mismatch, camera size different from the image size, impossible
+        camera values (fx <= 0, a pose whose rotation block is not a rotation, ...).
+    """
+    path = Path(path)
+    _require_file(path, "view file")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"view file {path}: not valid JSON ({exc})") from None
+    where = f"view file {path}"
+    if not isinstance(doc, dict):
+        raise ValueError(f"{where}: expected a JSON object, got {type(doc).__name__}")
+    if doc.get("format") != VIEW_FORMAT:
+        raise ValueError(f"{where}: 'format' must be {VIEW_FORMAT!r}, got {doc.get('format')!r}")
+    if doc.get("version") != VIEW_VERSION:
+        raise ValueError(f"{where}: unsupported 'version' {doc.get('version')!r} (this reader knows {VIEW_VERSION})")
+    for key in ("color", "camera"):
+        if key not in doc:
+            raise ValueError(f"{where}: missing key {key!r}")
+    if not isinstance(doc["color"], str) or not doc["color"]:
+        raise ValueError(f"{where}: 'color' must be a relative file name, got {doc['color']!r}")
+    name = doc.get("name", path.stem)
+    if not isinstance(name, str):
+        raise ValueError(f"{where}: 'name' must be a string, got {name!r}")
+
+    try:
+        camera = Camera.from_dict(doc["camera"])
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: bad 'camera': {exc}") from None
+
+    color_path = path.parent / doc["color"]
+    if not color_path.is_file():
+        raise FileNotFoundError(f"{where}: 'color' refers to a missing file {color_path}")
+    color = read_image(color_path, what=f"{where}: 'color'")
+    if color.ndim == 3 and color.shape[2] not in (3, 4):
+        raise ValueError(f"{where}: 'color' {color_path} has {color.shape[2]} channels; expected 1, 3 or 4")
+    if color.shape[:2] != camera.shape:
+        raise ValueError(f"{where}: camera size {camera.width}x{camera.height} does not match the color "
+                         f"image {color_path.name} ({color.shape[1]}x{color.shape[0]})")
+
+    z = None
+    spec = doc.get("depth")
+    if spec is not None:
+        dwhere = f"{where}: 'depth'"
+        if not isinstance(spec, dict) or not isinstance(spec.get("path"), str) or not spec["path"]:
+            raise ValueError(f"{dwhere} must be null or an object with a 'path' string, got {spec!r}")
+        encoding = spec.get("encoding", "z")
+        params = {k: v for k, v in spec.items() if k not in ("path", "encoding")}
+        p = _check_depth_params(encoding, params, dwhere)
+        depth_path = path.parent / spec["path"]
+        if not depth_path.is_file():
+            raise FileNotFoundError(f"{where}: 'depth.path' refers to a missing file {depth_path}")
+        stored = _read_stored_depth(depth_path, encoding, p, f"{where}: 'depth.path'")
+        if stored.shape != color.shape[:2]:
+            raise ValueError(f"{where}: depth {depth_path.name} is {stored.shape[1]}x{stored.shape[0]} but color "
+                             f"{color_path.name} is {color.shape[1]}x{color.shape[0]}")
+        z = _depth.sanitize_depth(_decode_depth(stored, encoding, p, camera))[0]
+    return View(color, z, camera, name)
+
+
+def view_to_dict(view: View, *, color_name: str, depth_name: str | None,
+                 depth_encoding: str = "z", depth_params: dict | None = None) -> dict:
+    """The JSON document of a view file (no I/O); see :func:`save_view`."""
+    doc: dict[str, Any] = {"format": VIEW_FORMAT, "version": VIEW_VERSION, "name": view.name, "color": color_name}
+    if view.depth is None or depth_name is None:
+        doc["depth"] = None
+    else:
+        doc["depth"] = {"path": depth_name, "encoding": depth_encoding,
+                        **{k: _json_number(v) for k, v in (depth_params or {}).items()}}
+    doc["camera"] = view.camera.to_dict()
+    return doc
+
+
+def _default_color_ext(dtype: np.dtype) -> str:
+    return ".png" if dtype in (np.uint8, np.uint16) else ".exr"
+
+
+def _default_depth_ext(encoding: str) -> str:
+    return ".png" if encoding == "fixed16" else ".exr"
+
+
+def _dumps(doc: dict) -> str:
+    """Indented JSON with every list of numbers on one line (readable 4x4 poses)."""
+    text = json.dumps(doc, indent=2, allow_nan=False)
+    return re.sub(r"\[[-+0-9.eE,\s]*\]", lambda m: re.sub(r"\s+", " ", m.group(0)).replace("[ ", "[").replace(" ]", "]"), text) + "\n"
+
+
+def save_view(view: View, path, *, color_name: str | None = None, depth_name: str | None = None,
+              depth_encoding: str = "z", depth_params: dict | None = None) -> Path:
+    """Write a view file: color image, depth image (if the view has depth) and the JSON sidecar.
+
+    Parameters
+    ----------
+    view : View
+    path : str or Path
+        The ``.json`` file to write. Color and depth go next to it.
+    color_name, depth_name : str, optional
+        File names relative to the JSON's folder. Defaults: ``<stem>_color.png`` (uint8/uint16
+        color) or ``<stem>_color.exr`` (float32), and ``<stem>_depth.exr`` (``.png`` for
+        ``fixed16``).
+    depth_encoding : str
+        One of :data:`DEPTH_ENCODINGS`; default ``"z"`` (planar z as float EXR, lossless).
+    depth_params : dict, optional
+        Parameters of the encoding (e.g. ``{"near": 0.1, "far": 100}`` for ``"fixed24"``;
+        ``{"scale": 0.001}`` for a 16-bit PNG of z in millimetre codes).
+
+    Returns
+    -------
+    Path of the JSON file.
+
+    All three files are written to temporary names first and renamed into place only after all
+    of them succeeded, so a failure leaves every existing file untouched.
+    """
+    if not isinstance(view, View):
+        raise TypeError(f"view: expected an ibr View, got {type(view).__name__}")
+    path = Path(path)
+    if path.suffix.lower() != ".json":
+        raise ValueError(f"path: a view file must end in .json, got {path}")
+    folder = path.parent
+    if not folder.is_dir():
+        raise FileNotFoundError(f"path: output folder {folder} does not exist")
+    params = _check_depth_params(depth_encoding, dict(depth_params or {}), "depth_params")
+    stem = path.stem
+    color_name = color_name or f"{stem}_color{_default_color_ext(view.color.dtype)}"
+    names = [path.name, color_name]
+    if view.depth is not None:
+        depth_name = depth_name or f"{stem}_depth{_default_depth_ext(depth_encoding)}"
+        names.append(depth_name)
+    resolved = [(folder / n).resolve() for n in names]
+    if len(set(resolved)) != len(resolved):
+        raise ValueError(f"color_name/depth_name: the JSON, color and depth files must be distinct, got {names}")
+
+    color = view.color
+    if color.dtype == np.float64:
+        color = color.astype(np.float32)
+    _check_write_dtype(folder / color_name, color, "color")
+    stored = None
+    if view.depth is not None:
+        stored = _encode_depth(view.depth, depth_encoding, params, view.camera)
+        if depth_encoding in _FIXED_BITS:
+            if depth_encoding == "fixed24" and Path(depth_name).suffix.lower() == ".png":
+                raise ValueError("depth_name: 24-bit codes do not fit a PNG; use .exr or .tif")
+            _check_write_dtype(folder / depth_name, stored, "depth")
+        elif Path(depth_name).suffix.lower() == ".png" and "scale" not in params:
+            raise ValueError(f"depth_params: a 16-bit PNG depth ({depth_name}) needs a 'scale'")
+
+    doc = view_to_dict(view, color_name=Path(color_name).as_posix(),
+                       depth_name=None if stored is None else Path(depth_name).as_posix(),
+                       depth_encoding=depth_encoding, depth_params=params)
+    text = _dumps(doc)
+    with contextlib.ExitStack() as stack:
+        # Everything is written to temporary names; renames happen when the stack unwinds
+        # without an exception (JSON first, then depth, then color).
+        tmp_color = stack.enter_context(atomic_path(folder / color_name))
+        write_image(tmp_color, color)
+        if stored is not None:
+            tmp_depth = stack.enter_context(atomic_path(folder / depth_name))
+            if depth_encoding in _FIXED_BITS:
+                write_image(tmp_depth, stored)
+            else:
+                write_depth(tmp_depth, stored, scale=params.get("scale"))
+        tmp_json = stack.enter_context(atomic_path(path))
+        tmp_json.write_text(text, encoding="utf-8")
+    return path
