@@ -18,7 +18,12 @@ def lazy_exports(package: str, exports: dict[str, str]):
 
     def __getattr__(name: str):
         where = exports.get(name)
-        if where is None:
+        if where is None:  # a subpackage or submodule not imported yet (``ibr.synth``)
+            try:
+                return importlib.import_module(f"{package}.{name}")
+            except ModuleNotFoundError as exc:
+                if exc.name != f"{package}.{name}":
+                    raise
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         if where.endswith("."):
             value = importlib.import_module(f"{package}.{where[:-1]}")

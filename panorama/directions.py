@@ -3,7 +3,7 @@
 Frame
 -----
 Directions live in the project's camera/world frame: **x right, y down, z forward**
-(``ibr.camera``). "Up" is therefore **-y**.
+(``ibr.base.camera``). "Up" is therefore **-y**.
 
 Equirectangular images (longitude/latitude)
 -------------------------------------------

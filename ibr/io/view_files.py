@@ -38,7 +38,7 @@ VIEW_VERSION = 1
 
 #: Depth encodings of a view file: required and optional parameters of each.
 #: ``scale`` (optional everywhere except the fixed-point codes) multiplies the stored values;
-#: it is required for integer files such as 16-bit PNG. See :mod:`ibr.depth` for the formulas.
+#: it is required for integer files such as 16-bit PNG. See :mod:`ibr.base.depth` for the formulas.
 DEPTH_ENCODINGS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "z": ((), ("scale",)),
     "range": ((), ("scale",)),
@@ -163,7 +163,7 @@ def _json_number(x: float):
 
 
 def load_view(path) -> View:
-    """Load a view file (JSON sidecar + color + optional depth) as a :class:`~ibr.view.View`.
+    """Load a view file (JSON sidecar + color + optional depth) as a :class:`~ibr.base.view.View`.
 
     Depth of any encoding in :data:`DEPTH_ENCODINGS` is converted to planar z (float32, NaN
     where invalid). The camera uses the pixel-center convention (pixel (u, v) has its center at

@@ -1,7 +1,7 @@
-"""numba kernels for :mod:`ibr.segment` and :mod:`ibr.mesh` (private; wrappers validate inputs).
+"""numba kernels for :mod:`ibr.mesh.segment` and :mod:`ibr.mesh` (private; wrappers validate inputs).
 
 All kernels take C-contiguous arrays; invalid depth is NaN in the float inputs. Pixel (u, v) =
-(column, row) is element ``[v, u]``. Plain numpy/Python references live in :mod:`ibr.segment`
+(column, row) is element ``[v, u]``. Plain numpy/Python references live in :mod:`ibr.mesh.segment`
 (``*_reference``) and the tests compare the two.
 """
 

@@ -1,6 +1,6 @@
 """Adaptive planar quad meshes from a depth buffer (seed 002, section 1.2).
 
-A :class:`QuadMesh` is the output of the segmentation in :mod:`ibr.segment`: one planar quad per
+A :class:`QuadMesh` is the output of the segmentation in :mod:`ibr.mesh.segment`: one planar quad per
 rectangle of source pixels, stored as arrays (no Python object per quad).
 
 Conventions
@@ -217,7 +217,7 @@ def build_mesh(
     method : {"edge", "separate", "paper"}
         ``"edge"`` (default): edge-aware break edges + error-bounded plane fits. ``"paper"``: the
         seed's |Δ²z'| and scan split, faithfully. ``"separate"``: the seed's split on separate
-        second differences. See :mod:`ibr.segment`.
+        second differences. See :mod:`ibr.mesh.segment`.
     baseline : float, optional
         Camera displacement (scene units) for ``max_error_px``; default 5% of the median depth.
     near, far : float, optional

@@ -1,4 +1,4 @@
-"""numba kernels behind :mod:`ibr.render` and :mod:`ibr.forward` (private; no validation here).
+"""numba kernels behind :mod:`ibr.render` and :mod:`ibr.render.forward` (private; no validation here).
 
 Pixel convention: pixel (u, v) = (column, row), centers at integer coordinates, the image spans
 [-0.5, W - 0.5] x [-0.5, H - 0.5]. Quad rect ``[u0, v0, u1, v1]`` covers source pixels

@@ -3,10 +3,10 @@
 The pipeline of seed 002 (DESIGN.md section 2, steps 4-7): each source view gets an adaptive quad
 mesh (built once and cached on the view object), the mesh is inverse-warped into the target camera
 (:func:`ibr.render.render_mesh`: exact per-quad homography, z-buffer), two sources are composited
-(:func:`ibr.composite.composite`: depth-aware blend by default, the seed's front/back order on
+(:func:`ibr.render.composite.composite`: depth-aware blend by default, the seed's front/back order on
 request) and the remaining holes are filled (previous frame in a sequence, depth-aware background
 fill for a single frame). ``method="forward"`` replaces the mesh by the per-pixel splat of seed 003
-(:func:`ibr.forward.forward_warp`) as a fast preview.
+(:func:`ibr.render.forward.forward_warp`) as a fast preview.
 
 Conventions: pixel (u, v) = (column, row) with centers at integer coordinates (the image spans
 [-0.5, W-0.5] x [-0.5, H-0.5]); depth is planar z in scene units, float32, NaN where unknown;
@@ -80,7 +80,7 @@ class Rendering:
         return float(self.holes.mean())
 
     def to_view(self, name: str = "rendering") -> View:
-        """The rendering as a :class:`~ibr.view.View` (e.g. for :func:`ibr.save_view`)."""
+        """The rendering as a :class:`~ibr.base.view.View` (e.g. for :func:`ibr.save_view`)."""
         return View(self.color, self.depth, self.camera, name)
 
 
@@ -234,7 +234,7 @@ def warp(
     interpolation : {"linear", "cubic"}
         Color reconstruction filter (bicubic: sharper, about 5x the sampling time).
     splat : {"inverse", "nearest"}
-        Splat mode of ``method="forward"`` (:func:`ibr.forward.forward_warp`).
+        Splat mode of ``method="forward"`` (:func:`ibr.render.forward.forward_warp`).
     mesh_options : dict, optional
         Options of :func:`ibr.build_mesh` (level of detail); the mesh is cached per view.
 

@@ -1,6 +1,6 @@
 """numba kernels of seed 003's method 2 (per-pixel mapping) and the background-side hole fill.
 
-Private: :mod:`ibr.stereo_pair` validates, allocates and calls these. Each kernel has a plain
+Private: :mod:`ibr.stereo.pair` validates, allocates and calls these. Each kernel has a plain
 numpy/Python reference below (``*_reference``) that the tests compare against.
 
 Pixel convention: pixel centers at integer coordinates; a source pixel u maps to the target

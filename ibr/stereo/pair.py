@@ -240,8 +240,8 @@ def stereo_pair_from_zbuffer(color, zbuffer, projection, *, e: float, f: float, 
 
     ``zbuffer`` holds window depths w in [0, 1] (``glReadPixels(GL_DEPTH_COMPONENT)``, rows top
     to bottom as in the color); near/far/frustum come from ``projection`` via
-    :func:`ibr.camera.camera_from_gl_projection`, planar z from the exact inverse
-    ``z = n f / (f - w (f - n))`` (:func:`ibr.depth.z_from_window`; seed 003's printed inverse is
+    :func:`ibr.base.camera.camera_from_gl_projection`, planar z from the exact inverse
+    ``z = n f / (f - w (f - n))`` (:func:`ibr.base.depth.z_from_window`; seed 003's printed inverse is
     wrong). With ``far_is_empty`` the cleared value w = 1 is treated as no depth.
     """
     from ..base.depth import z_from_window

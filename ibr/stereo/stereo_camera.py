@@ -12,8 +12,8 @@ Conventions
 -----------
 * Scene inputs (``position``, ``view_dir``, ``up``) are world vectors in whatever world frame the
   caller uses (seed 000's table 1 uses an OpenGL-style world with y up). The eye cameras are
-  :class:`ibr.camera.Camera` objects (OpenCV frame: x right, y down, z forward) built *from the
-  OpenGL matrices* with :func:`ibr.camera.camera_from_gl_projection`, i.e. converted at the edge.
+  :class:`ibr.base.camera.Camera` objects (OpenCV frame: x right, y down, z forward) built *from the
+  OpenGL matrices* with :func:`ibr.base.camera.camera_from_gl_projection`, i.e. converted at the edge.
 * Depth ``z`` below is planar depth along the view direction, **positive in front of the camera**
   (OpenCV). Seed 000 writes its formulas with OpenGL's z < 0; its eq. 9 ``P_h = e (1 + f/z_gl)``
   is ``P_h = e (1 - f/z)`` here.
