@@ -4,7 +4,8 @@ In: paths. Out: arrays, :class:`~ibr.base.View` objects -- and back. Every write
 (:func:`atomic_path`: temporary name in the destination folder, renamed when complete).
 :mod:`~ibr.io.images` (OpenImageIO; PFM with numpy), :mod:`~ibr.io.view_files` (the JSON view
 file and its depth encodings), :mod:`~ibr.io.mesh_files` (OBJ, PLY, segmentation PNG),
-:mod:`~ibr.io.middlebury` (the motorcycle pair as views). The algorithm stages never import
+:mod:`~ibr.io.middlebury` (the motorcycle pair as views), :mod:`~ibr.io.outputs` (one output plan
+per command: outputs checked before work, staged, renamed together). The algorithm stages never import
 ``ibr.io``: they take arrays.
 """
 
@@ -27,6 +28,7 @@ _EXPORTS = {
     "save_view": "view_files",
     "view_to_dict": "view_files",
     "write_obj": "mesh_files",
+    "OutputPlan": "outputs",
     "write_ply": "mesh_files",
     "write_segmentation_png": "mesh_files",
 }
