@@ -23,7 +23,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from .validate import check_array, check_finite_scalar, check_near_far, check_positive
+from .validate import (check_array, check_camera_dict, check_finite_scalar, check_image_size, check_near_far,
+                       check_positive)
 
 __all__ = [
     "Camera",
@@ -93,6 +94,7 @@ class Camera:
             if isinstance(value, bool) or int(value) != value or int(value) < 1:
                 raise ValueError(f"{name}: expected a positive integer, got {value!r}")
             set_(self, name, int(value))
+        check_image_size("camera", self.width, self.height)  # ceilings before any image is allocated (#12)
         set_(self, "world_from_cam", _readonly(_check_pose("world_from_cam", self.world_from_cam)))
 
     # ----------------------------------------------------------------- construction
@@ -295,14 +297,10 @@ class Camera:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "Camera":
-        """Inverse of :meth:`to_dict`; raises ``ValueError`` naming a missing or bad key."""
-        if not isinstance(d, dict):
-            raise TypeError(f"camera: expected a JSON object, got {type(d).__name__}")
-        missing = [k for k in ("width", "height", "fx", "fy", "cx", "cy") if k not in d]
-        if missing:
-            raise ValueError(f"camera: missing key(s) {', '.join(missing)}")
-        pose = d.get("world_from_cam", np.eye(4).tolist())
-        return cls(d["fx"], d["fy"], d["cx"], d["cy"], d["width"], d["height"], np.asarray(pose, float))
+        """Inverse of :meth:`to_dict`; raises ``ValueError`` naming a missing, unknown or bad key
+        (:func:`~ibr.base.validate.check_camera_dict`)."""
+        d = check_camera_dict(d, "camera")  # strict: unknown keys, types, finiteness, ranges (#12)
+        return cls(d["fx"], d["fy"], d["cx"], d["cy"], d["width"], d["height"], d["world_from_cam"])
 
     def __repr__(self) -> str:
         p = self.position

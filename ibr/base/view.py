@@ -6,10 +6,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .validate import check_image
+from .validate import check_color, check_image
 from .camera import Camera
 
-__all__ = ["View"]
+__all__ = ["DEPTH_RANGE", "View"]
+
+#: Valid planar depths lie in this range (scene units). Values outside it are refused rather than
+#: rendered into nonsense (1e-30 everywhere puts every point on the camera centre; 1e30 makes
+#: every parallax zero); rescale such a depth (a view file's ``scale``) into the range.
+DEPTH_RANGE = (1e-6, 1e9)
 
 
 @dataclass(frozen=True, eq=False)
@@ -18,10 +23,12 @@ class View:
 
     Parameters
     ----------
-    color : (H, W, 3) or (H, W) array
-        uint8, uint16 or float32 color; float colors are linear or display values in [0, 1].
+    color : (H, W), (H, W, 3) or (H, W, 4) array
+        uint8, uint16, float32 or float64 color (any other dtype raises ``TypeError``); float
+        colors are linear or display values in [0, 1].
     depth : (H, W) float32 array or None
-        Planar z (along the camera's optical axis) in scene units, NaN where invalid. ``None``
+        Planar z (along the camera's optical axis) in scene units, NaN where invalid (non-finite
+        and non-positive values become NaN); valid values must lie in :data:`DEPTH_RANGE`. ``None``
         for a view that carries color and camera only (e.g. the Middlebury right image).
     camera : Camera
         Camera whose image size equals the color's.
@@ -35,7 +42,7 @@ class View:
     name: str = "view"
 
     def __post_init__(self):
-        color = check_image("color", self.color, channels=(1, 3, 4))
+        color = check_color("color", self.color)
         if not isinstance(self.camera, Camera):
             raise TypeError(f"camera: expected a Camera, got {type(self.camera).__name__}")
         if color.shape[:2] != self.camera.shape:
@@ -54,6 +61,12 @@ class View:
             depth = depth.astype(np.float32, copy=True)
             with np.errstate(invalid="ignore"):
                 depth[~(np.isfinite(depth) & (depth > 0))] = np.nan
+            if not np.isnan(depth).all():
+                lo, hi = float(np.nanmin(depth)), float(np.nanmax(depth))
+                if lo < DEPTH_RANGE[0] or hi > DEPTH_RANGE[1]:
+                    raise ValueError(f"depth: valid values must lie in [{DEPTH_RANGE[0]:g}, {DEPTH_RANGE[1]:g}] "
+                                     f"scene units, got {lo:.6g}..{hi:.6g} (rescale the depth, e.g. a view "
+                                     "file's depth 'scale')")
             object.__setattr__(self, "depth", depth)
 
     @property
