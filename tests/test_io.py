@@ -369,7 +369,7 @@ def edit(path, fn):
         (lambda d: d["camera"].update(world_from_cam=(2 * np.eye(4)).tolist()), ValueError, "proper rotation|last row"),
         (lambda d: d["camera"].pop("cx"), ValueError, "missing key\\(s\\) cx"),
         (lambda d: d["camera"].update(width=21), ValueError, r"camera size 21x12 does not match the color image g_color\.png \(20x12\)"),
-        (lambda d: d["depth"].update(encoding="inverse"), ValueError, "unknown depth encoding 'inverse'; expected one of 'z'"),
+        (lambda d: d["depth"].update(encoding="inverse"), ValueError, "unknown depth encoding 'inverse'.*; expected one of 'z'"),
         (lambda d: d["depth"].update(encoding="disparity", baseline=0.1), ValueError, "needs parameter\\(s\\) focal_px, doffs"),
         (lambda d: d["depth"].update(encoding="window", near=1.0, far=0.5), ValueError, "need 0 < near < far"),
         (lambda d: d["depth"].update(dofs=3.0), ValueError, "unknown parameter\\(s\\) dofs for encoding 'z'"),

@@ -24,6 +24,7 @@ _EXPORTS = {
     "DEPTH_ENCODINGS": "view_files",
     "VIEW_FORMAT": "view_files",
     "VIEW_VERSION": "view_files",
+    "load_camera": "view_files",
     "load_view": "view_files",
     "save_view": "view_files",
     "view_to_dict": "view_files",

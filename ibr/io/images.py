@@ -15,6 +15,9 @@ PFM     Portable float map as used by Middlebury: header ``Pf`` (1 channel) or `
 
 Writing is atomic: every output goes to a temporary name in the destination folder and is
 renamed onto its final name only when it has been written completely (:func:`atomic_path`).
+Reading checks the image-size ceilings (:data:`ibr.base.validate.MAX_IMAGE_PIXELS`, ``MAX_IMAGE_BYTES``)
+from the header, before any pixel is allocated. Commands stage all their outputs together with
+:class:`ibr.io.outputs.OutputPlan`.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from typing import Iterator
 import numpy as np
 
 from ..base import depth as _depth
-from ..base.validate import check_choice, check_image
+from ..base.validate import check_choice, check_image, check_image_size
 
 __all__ = [
     "atomic_path",
@@ -117,6 +120,7 @@ def read_pfm(path) -> tuple[np.ndarray, float]:
     if w < 1 or h < 1 or s == 0 or not math.isfinite(s):
         raise ValueError(f"{path}: bad PFM header (width {w}, height {h}, scale {s})")
     c = 3 if kind == b"PF" else 1
+    check_image_size(f"pfm {path}", w, h, channels=c, itemsize=4)  # before allocating (#12)
     n = w * h * c * 4
     body = data[m.end():]
     if len(body) < n:
@@ -194,6 +198,10 @@ def read_image(path, *, what: str = "image") -> np.ndarray:
     if inp is None:
         raise ValueError(f"{what}: cannot read {path}: {oiio.geterror() or 'unknown format'}")
     try:
+        spec = inp.spec()
+        # the size ceilings, before the pixels are allocated (#12)
+        check_image_size(f"{what} {path}", spec.width, spec.height, channels=max(1, spec.nchannels),
+                         itemsize=max(4, spec.format.size()))
         pixels = inp.read_image(0, 0, 0, inp.spec().nchannels, oiio.UNKNOWN)
         err = inp.geterror() if inp.has_error else ""
     finally:

@@ -28,10 +28,12 @@ import numpy as np
 
 from ..base import depth as _depth
 from ..base.camera import Camera
+from ..base.validate import check_keys, check_relative_path, nearest_name
 from ..base.view import View
 from .images import _check_write_dtype, _require_file, atomic_path, read_depth, read_image, write_depth, write_image
 
-__all__ = ["DEPTH_ENCODINGS", "VIEW_FORMAT", "VIEW_VERSION", "load_view", "save_view", "view_to_dict"]
+__all__ = ["DEPTH_ENCODINGS", "VIEW_FORMAT", "VIEW_KEYS", "VIEW_VERSION", "load_camera", "load_view", "save_view",
+           "view_to_dict"]
 
 VIEW_FORMAT = "ibr-view"
 VIEW_VERSION = 1
@@ -52,6 +54,9 @@ DEPTH_ENCODINGS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 
 _FIXED_BITS = {"fixed16": 16, "fixed24": 24}
 
+#: Top-level keys of a view file (anything else is refused, with the nearest valid name).
+VIEW_KEYS = ("format", "version", "name", "color", "depth", "camera")
+
 
 # --------------------------------------------------------------------------- view files
 def _param(params: dict, key: str, where: str, *, allow_inf: bool = False) -> float:
@@ -64,17 +69,20 @@ def _param(params: dict, key: str, where: str, *, allow_inf: bool = False) -> fl
 
 
 def _check_depth_params(encoding, params: dict, where: str) -> dict:
-    if encoding not in DEPTH_ENCODINGS:
-        raise ValueError(f"{where}: unknown depth encoding {encoding!r}; expected one of "
-                         f"{', '.join(map(repr, DEPTH_ENCODINGS))}")
+    if not isinstance(encoding, str) or encoding not in DEPTH_ENCODINGS:
+        near = nearest_name(encoding, DEPTH_ENCODINGS)
+        raise ValueError(f"{where}: unknown depth encoding {encoding!r}{f' (did you mean {near!r}?)' if near else ''}; "
+                         f"expected one of {', '.join(map(repr, DEPTH_ENCODINGS))}")
     required, optional = DEPTH_ENCODINGS[encoding]
+    unknown = sorted(set(params) - set(required) - set(optional), key=str)
+    if unknown:  # before "missing": a misspelled key is the likelier mistake (#12)
+        near = nearest_name(unknown[0], [k for k in required + optional if k not in params])
+        hint = f" (did you mean {near!r}?)" if near else ""
+        raise ValueError(f"{where}: unknown parameter(s) {', '.join(map(str, unknown))}{hint} for encoding "
+                         f"{encoding!r} (allowed: {', '.join(required + optional) or 'none'})")
     missing = [k for k in required if k not in params]
     if missing:
         raise ValueError(f"{where}: encoding {encoding!r} needs parameter(s) {', '.join(missing)}")
-    unknown = sorted(set(params) - set(required) - set(optional))
-    if unknown:
-        raise ValueError(f"{where}: unknown parameter(s) {', '.join(unknown)} for encoding {encoding!r} "
-                         f"(allowed: {', '.join(required + optional) or 'none'})")
     out: dict[str, Any] = {}
     for k in required + optional:
         if k not in params:
@@ -190,13 +198,16 @@ def load_view(path) -> View:
         raise ValueError(f"{where}: expected a JSON object, got {type(doc).__name__}")
     if doc.get("format") != VIEW_FORMAT:
         raise ValueError(f"{where}: 'format' must be {VIEW_FORMAT!r}, got {doc.get('format')!r}")
-    if doc.get("version") != VIEW_VERSION:
-        raise ValueError(f"{where}: unsupported 'version' {doc.get('version')!r} (this reader knows {VIEW_VERSION})")
+    version = doc.get("version")
+    if isinstance(version, bool) or version != VIEW_VERSION:
+        raise ValueError(f"{where}: unsupported 'version' {version!r} (this reader knows {VIEW_VERSION})")
+    check_keys(where, doc, VIEW_KEYS)  # unknown keys ("dpeth", "pose") are refused, never ignored (#12)
     for key in ("color", "camera"):
         if key not in doc:
             raise ValueError(f"{where}: missing key {key!r}")
     if not isinstance(doc["color"], str) or not doc["color"]:
         raise ValueError(f"{where}: 'color' must be a relative file name, got {doc['color']!r}")
+    check_relative_path(f"{where}: 'color'", doc["color"])
     name = doc.get("name", path.stem)
     if not isinstance(name, str):
         raise ValueError(f"{where}: 'name' must be a string, got {name!r}")
@@ -222,6 +233,7 @@ def load_view(path) -> View:
         dwhere = f"{where}: 'depth'"
         if not isinstance(spec, dict) or not isinstance(spec.get("path"), str) or not spec["path"]:
             raise ValueError(f"{dwhere} must be null or an object with a 'path' string, got {spec!r}")
+        check_relative_path(f"{dwhere}: 'path'", spec["path"])
         encoding = spec.get("encoding", "z")
         params = {k: v for k, v in spec.items() if k not in ("path", "encoding")}
         p = _check_depth_params(encoding, params, dwhere)
@@ -234,6 +246,41 @@ def load_view(path) -> View:
                              f"{color_path.name} is {color.shape[1]}x{color.shape[0]}")
         z = _depth.sanitize_depth(_decode_depth(stored, encoding, p, camera))[0]
     return View(color, z, camera, name)
+
+
+def load_camera(path, *, what: str = "camera file") -> Camera:
+    """A :class:`~ibr.base.camera.Camera` from a view file (its camera; colour and depth are not
+    read) or from a bare camera JSON object, optionally wrapped as ``{"camera": {...}}``.
+
+    The camera object is checked strictly (:func:`ibr.base.validate.check_camera_dict`): unknown
+    keys such as ``"pose"`` are refused with the nearest valid name, never ignored.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file. ``ValueError`` for invalid JSON or a bad camera (the message starts with ``what``).
+    """
+    path = Path(path)
+    _require_file(path, what)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{what} {path}: not valid JSON ({exc})") from None
+    where = f"{what} {path}"
+    if isinstance(doc, dict) and "format" in doc:
+        if doc["format"] != VIEW_FORMAT:
+            raise ValueError(f"{where}: 'format' must be {VIEW_FORMAT!r}, got {doc['format']!r}")
+        check_keys(where, doc, VIEW_KEYS)
+        if "camera" not in doc:
+            raise ValueError(f"{where}: missing key 'camera'")
+        doc = doc["camera"]
+    elif isinstance(doc, dict) and isinstance(doc.get("camera"), dict):
+        check_keys(where, doc, ("camera", "name"))
+        doc = doc["camera"]
+    try:
+        return Camera.from_dict(doc)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
 
 
 def view_to_dict(view: View, *, color_name: str, depth_name: str | None,
@@ -273,7 +320,7 @@ def save_view(view: View, path, *, color_name: str | None = None, depth_name: st
     path : str or Path
         The ``.json`` file to write. Color and depth go next to it.
     color_name, depth_name : str, optional
-        File names relative to the JSON's folder. Defaults: ``<stem>_color.png`` (uint8/uint16
+        File names relative to the JSON's folder (no absolute path, no ``..``). Defaults: ``<stem>_color.png`` (uint8/uint16
         color) or ``<stem>_color.exr`` (float32), and ``<stem>_depth.exr`` (``.png`` for
         ``fixed16``).
     depth_encoding : str
@@ -300,9 +347,11 @@ def save_view(view: View, path, *, color_name: str | None = None, depth_name: st
     params = _check_depth_params(depth_encoding, dict(depth_params or {}), "depth_params")
     stem = path.stem
     color_name = color_name or f"{stem}_color{_default_color_ext(view.color.dtype)}"
+    check_relative_path("color_name", color_name)  # never write outside the JSON's folder (#12)
     names = [path.name, color_name]
     if view.depth is not None:
         depth_name = depth_name or f"{stem}_depth{_default_depth_ext(depth_encoding)}"
+        check_relative_path("depth_name", depth_name)
         names.append(depth_name)
     resolved = [(folder / n).resolve() for n in names]
     if len(set(resolved)) != len(resolved):
