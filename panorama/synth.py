@@ -69,3 +69,26 @@ def render_cubemap(scene: Scene, face_size: int, *, origin=(0.0, 0.0, 0.0), supe
         colors.append((acc / len(offs)).astype(np.float32))
         depths.append(planar_from_range(rng, lengths[f]))
     return layout_faces(np.stack(colors), layout), layout_faces(np.stack(depths), layout)
+
+
+def render_spherical(scene: Scene, camera, *, supersample: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """(color (H, W, 3) float32, range (H, W) float32) of a :class:`~ibr.base.ray_camera.SphericalCamera`.
+
+    Exactly the camera's rays (mono equirect or an ODS eye, fade included): colour supersampled
+    k x k over each pixel's (u, v) footprint (each sub-ray with its own origin), range from the
+    ray origin at the pixel centre, NaN on a miss.
+    """
+    from ibr.base.ray_camera import SphericalCamera
+
+    if not isinstance(camera, SphericalCamera):
+        raise TypeError(f"camera: expected a SphericalCamera, got {type(camera).__name__}")
+    h, w = camera.shape
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    o, d = camera.rays_world(u, v)
+    _, rng = render_rays(scene, o.reshape(-1, 3), d.reshape(-1, 3))
+    acc = np.zeros((h * w, 3))
+    offs = _offsets(supersample)
+    for du, dv in offs:
+        o, d = camera.rays_world(u + du, v + dv)
+        acc += render_rays(scene, o.reshape(-1, 3), d.reshape(-1, 3))[0]
+    return (acc / len(offs)).reshape(h, w, 3).astype(np.float32), rng.reshape(h, w).astype(np.float32)

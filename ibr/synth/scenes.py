@@ -23,6 +23,8 @@ SCENES = {
     "grazing": "large brick ground plane seen at 84 degrees incidence plus a far photo wall",
     "plane": "one fronto-parallel textured rectangle at z = 3 filling the view",
     "box_corner": "one axis-aligned box, corner toward the camera; black background (rays miss)",
+    "capture": "a 30 x 32 m hall around a capture point at the origin (eye height 1.6 m) with objects "
+               "from 0.5 m to 20 m in every direction: for 360-degree rigs, stitching and ODS",
 }
 
 _X, _Y, _Z = np.eye(3)
@@ -137,8 +139,34 @@ def _box_corner():
     return [Box(image_texture("coffee", 0.8), (0.8, 0.8, 3.6), (0.5, 0.5, 0.5))]
 
 
+def _capture():
+    """Objects all around the origin, nearest surface 0.5 m, walls 12-20 m away (issue #20)."""
+    tex = {
+        "floor": image_texture("gravel", 2.0),
+        "ceiling": image_texture("moon", 6.0),
+        "front": image_texture("astronaut", 14.0),
+        "back": image_texture("coffee", 12.0),
+        "left": image_texture("brick", 3.0),
+        "right": image_texture("rocket", 16.0),
+    }
+    prims = _room_shell(-16.0, 14.0, -6.0, 1.6, -12.0, 20.0, tex)
+    prims += [
+        Box(image_texture("immunohistochemistry", 0.5), (-0.75, 0.3, -0.3), (0.2, 0.2, 0.2), rotation(30.0)),
+        Sphere(image_texture("chelsea"), (0.9, 0.1, 0.6), 0.3),
+        Box(image_texture("camera", 0.6), (0.3, -1.2, 2.0), (0.03, 2.8, 0.03)),
+        Sphere(checker_texture(), (-1.2, 0.8, 3.0), 0.6),
+        Box(image_texture("coffee", 1.5), (2.5, 0.6, -2.5), (0.7, 1.0, 0.6), rotation(-20.0)),
+        Box(image_texture("rocket", 2.0), (-4.0, 0.1, -5.0), (1.0, 1.5, 1.0), rotation(40.0)),
+        Sphere(image_texture("hubble_deep_field", 1.0), (5.0, -0.5, 6.0), 1.2),
+        Box(image_texture("grass", 2.0), (-7.0, 0.0, 9.0), (1.5, 1.6, 1.5), rotation(15.0)),
+    ]
+    prims += make_staircase(origin=(6.0, 1.6, 12.0), steps=6, step_width=3.0, step_rise=0.4, step_run=0.8,
+                            texture=image_texture("brick", 1.5), yaw_deg=-30.0)
+    return prims
+
+
 _BUILDERS = {"room": _room, "clutter": _clutter, "grazing": _grazing, "plane": _plane,
-             "box_corner": _box_corner}
+             "box_corner": _box_corner, "capture": _capture}
 
 # (eye_a, eye_b, target, hfov_deg): cameras 0.2-0.3 units apart converging on a common target,
 # i.e. a small relative rotation (1-3 degrees) on top of the horizontal baseline.
@@ -149,6 +177,7 @@ _CAMERAS = {
     "grazing": ((-0.15, 0.0, 0.0), (0.15, 0.0, 0.0), (0.0, 6 * np.sin(np.radians(6.0)), 6 * np.cos(np.radians(6.0))), 60.0),
     "plane": ((-0.1, 0.0, 0.0), (0.1, 0.0, 0.0), (0.0, 0.0, 3.0), 60.0),
     "box_corner": ((-0.1, 0.0, 0.0), (0.1, 0.0, 0.0), (0.8, 0.8, 3.6), 40.0),
+    "capture": ((-0.1, 0.0, 0.0), (0.1, 0.0, 0.0), (0.0, 0.0, 5.0), 60.0),
 }
 
 

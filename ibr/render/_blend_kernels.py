@@ -1,0 +1,145 @@
+"""numba kernels of N-source depth-aware blending behind :mod:`ibr.render.blend` (private).
+
+Each source is added in turn to running per-pixel accumulators (no N-layer stack is held):
+``front`` is the nearest range seen so far; a new sample nearer than ``front * (1 - tol)``
+replaces the accumulators (it occludes what was there), one within ``front * (1 +- tol)`` joins
+the weighted sum, a farther one is hidden. Colour is sampled bilinearly at the source position
+(pixel centres at integers, taps clamped to the image) only where a source covers the pixel.
+
+Weight of a sample (all factors in [0, 1]):
+``w = incidence**2 * exp(-(angle / sigma)**2) * min(1, border_px / feather)``, ``angle`` the angle
+at the surface point between the target ray and the ray from the source camera's centre,
+``incidence`` the cosine between the source ray and the surface normal, ``border_px`` the
+distance of the sample from the source image's border (feathering hides where a source ends).
+A tiny floor keeps every covering sample's weight positive so no covered pixel becomes a hole.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+__all__: list[str] = []
+
+_W_FLOOR = 1e-6
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _bilinear(src, x, y, ch):
+    h, w = src.shape[0], src.shape[1]
+    fx0 = math.floor(x)
+    fy0 = math.floor(y)
+    ax = x - fx0
+    ay = y - fy0
+    x0 = min(max(int(fx0), 0), w - 1)
+    x1 = min(max(int(fx0) + 1, 0), w - 1)
+    y0 = min(max(int(fy0), 0), h - 1)
+    y1 = min(max(int(fy0) + 1, 0), h - 1)
+    top = src[y0, x0, ch] * (1.0 - ax) + src[y0, x1, ch] * ax
+    bot = src[y1, x0, ch] * (1.0 - ax) + src[y1, x1, ch] * ax
+    return top * (1.0 - ay) + bot * ay
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, front, best_w, best_id):
+    f = front[v, u]
+    if z < f * (1.0 - rel_tol):  # nearer surface: occludes what was accumulated
+        for ch in range(acc.shape[2]):
+            acc[v, u, ch] = 0.0
+        acc_w[v, u] = 0.0
+        acc_z[v, u] = 0.0
+        best_w[v, u] = 0.0
+        front[v, u] = z
+    elif not (z <= f * (1.0 + rel_tol)):
+        return  # hidden behind the front surface
+    elif z < f:
+        front[v, u] = z
+    for ch in range(acc.shape[2]):
+        acc[v, u, ch] += wgt * _bilinear(src, us, vs, ch)
+    acc_w[v, u] += wgt
+    acc_z[v, u] += wgt * z
+    if wgt > best_w[v, u]:
+        best_w[v, u] = wgt
+        best_id[v, u] = src_id
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _weight(px, py, pz, dx, dy, dz, cxs, cys, czs, incid, us, vs, src_w, src_h, inv_sigma2, inv_feather):
+    # angle between the target ray d and the source ray (P - C) at the surface point P
+    sx, sy, sz = px - cxs, py - cys, pz - czs
+    ns = math.sqrt(sx * sx + sy * sy + sz * sz)
+    cosang = (sx * dx + sy * dy + sz * dz) / max(ns, 1e-300)
+    ang = math.acos(min(1.0, max(-1.0, cosang)))
+    border = min(min(us + 0.5, src_w - 0.5 - us), min(vs + 0.5, src_h - 0.5 - vs))
+    feather = min(1.0, max(0.0, border * inv_feather))
+    return max(incid * incid * math.exp(-ang * ang * inv_sigma2) * feather, _W_FLOOR)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def accumulate_spherical(src, map_u, map_v, rng, incid, rows, cols, center, src_id, rel_tol, inv_sigma2,
+                         inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
+    """Add one source rendered into a spherical camera (rig-frame tables, see _ray_kernels)."""
+    h, w = rng.shape
+    src_h, src_w = src.shape[0], src.shape[1]
+    for v in prange(h):
+        slat, clat, sr = rows[v, 0], rows[v, 1], rows[v, 2]
+        for u in range(w):
+            z = rng[v, u]
+            if not (z == z):
+                continue
+            slon, clon = cols[u, 0], cols[u, 1]
+            dx, dy, dz = clat * slon, -slat, clat * clon
+            px, py, pz = sr * clon + z * dx, z * dy, -sr * slon + z * dz
+            us, vs = map_u[v, u], map_v[v, u]
+            wgt = _weight(px, py, pz, dx, dy, dz, center[0], center[1], center[2], incid[v, u], us, vs,
+                          src_w, src_h, inv_sigma2, inv_feather)
+            _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, front, best_w, best_id)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def accumulate_pinhole(src, map_u, map_v, depth, incid, kinv, center, src_id, rel_tol, inv_sigma2,
+                       inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
+    """Add one source rendered into a pinhole target (planar depth z, target camera frame).
+
+    ``kinv`` is the target's inverse intrinsics and ``center`` the source camera centre in the
+    target camera frame. The front test runs on planar z (one camera centre: the same order as
+    range along each ray).
+    """
+    h, w = depth.shape
+    src_h, src_w = src.shape[0], src.shape[1]
+    for v in prange(h):
+        for u in range(w):
+            z = depth[v, u]
+            if not (z == z):
+                continue
+            rx = kinv[0, 0] * u + kinv[0, 1] * v + kinv[0, 2]
+            ry = kinv[1, 0] * u + kinv[1, 1] * v + kinv[1, 2]
+            rz = 1.0
+            nrm = math.sqrt(rx * rx + ry * ry + rz * rz)
+            px, py, pz = rx * z, ry * z, z
+            us, vs = map_u[v, u], map_v[v, u]
+            wgt = _weight(px, py, pz, rx / nrm, ry / nrm, rz / nrm, center[0], center[1], center[2], incid[v, u],
+                          us, vs, src_w, src_h, inv_sigma2, inv_feather)
+            _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, front, best_w, best_id)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def resolve(acc, acc_w, acc_z, out, depth, coverage):
+    """Normalize the accumulators: colour and depth as weighted means; coverage where w > 0."""
+    h, w = acc_w.shape
+    for v in prange(h):
+        for u in range(w):
+            s = acc_w[v, u]
+            if s > 0.0:
+                inv = 1.0 / s
+                for ch in range(acc.shape[2]):
+                    out[v, u, ch] = acc[v, u, ch] * inv
+                depth[v, u] = acc_z[v, u] * inv
+                coverage[v, u] = True
+            else:
+                for ch in range(acc.shape[2]):
+                    out[v, u, ch] = 0.0
+                depth[v, u] = np.nan
+                coverage[v, u] = False

@@ -1,0 +1,263 @@
+"""numba kernels behind :mod:`ibr.render.ray_raster` (private; no validation here).
+
+Target: a :class:`~ibr.base.ray_camera.SphericalCamera` given as tables -- per row
+``[sin lat, cos lat, s*r(lat)]``, per column ``[sin lon, cos lon]`` -- so pixel (u, v) has the rig
+frame ray ``o = s r (cos lon, 0, -sin lon)``, ``d = (cos lat sin lon, -sin lat, cos lat cos lon)``.
+
+Per quad, in the rig frame, the source plane is ``n . X = off`` (from the source camera's
+``n_cam . X_s = 1`` and ``X_s = R X + T``: ``n = R^T n_cam``, ``off = 1 - n_cam . T``); the source
+camera lies on the side ``n . X < off``. A pixel's ray meets the plane at
+``t = (off - n . o) / (n . d)``; the hit is kept when the ray origin is on the source camera's side
+(front-facing), ``t > 0``, the hit is in front of the source camera and its source pixel lies in
+the rect's half-open pixel-edge outline (the same fill rule as the pinhole rasterizer), and ``t``
+beats the z-buffer (range along the unit ray).
+
+Conservative bounds: each quad's outline is sampled along its four edges (spacing <= 2 px in the
+target), projected with the camera's inverse, unwrapped across the +-180 deg seam and padded;
+quads over a pole (the vertical ray from the rig centre hits them) span all columns up to that
+pole's row.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+__all__: list[str] = []
+
+_PAD = 2  # pixels added around the sampled outline's bounds
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _radius(lat_abs, r0, fa, fb):
+    if lat_abs <= fa:
+        return r0
+    if lat_abs >= fb:
+        return 0.0
+    return r0 * 0.5 * (1.0 + math.cos(math.pi * (lat_abs - fa) / (fb - fa)))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _project(x, y, z, sign, r0, fa, fb, width, height):
+    """(u, v, ok) of a rig-frame point (see SphericalCamera.project)."""
+    rho = math.hypot(x, z)
+    alpha = math.atan2(x, z)
+    lat = math.atan2(-y, rho)
+    r = 0.0
+    if sign != 0:
+        for _ in range(6):
+            r = _radius(abs(lat), r0, fa, fb)
+            if rho <= r:
+                return 0.0, 0.0, False
+            lat = math.atan2(-y, math.sqrt(rho * rho - r * r))
+        lon = alpha - math.asin(sign * r / rho)
+    else:
+        lon = alpha
+    u = (lon / (2.0 * math.pi) + 0.5) * width - 0.5
+    v = (0.5 - lat / math.pi) * height - 0.5
+    return u, v, True
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _src_pixel(x, y, z, rot, tr, fx, fy, cx, cy):
+    xs = rot[0, 0] * x + rot[0, 1] * y + rot[0, 2] * z + tr[0]
+    ys = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z + tr[1]
+    zs = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z + tr[2]
+    if not (zs > 0.0):
+        return 0.0, 0.0, False
+    return fx * xs / zs + cx, fy * ys / zs + cy, True
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _pole_inside(nx, ny, nz, off, dy, rect, rot, tr, fx, fy, cx, cy):
+    """Does the vertical ray from the rig centre toward dy (-1 up, +1 down) hit the quad?"""
+    if not (off > 0.0):  # rig centre not on the source side of the plane
+        return False
+    nd = ny * dy
+    if not (nd > 0.0):
+        return False
+    t = off / nd
+    us, vs, ok = _src_pixel(0.0, t * dy, 0.0, rot, tr, fx, fy, cx, cy)
+    return ok and rect[0] - 0.5 <= us < rect[2] - 0.5 and rect[1] - 0.5 <= vs < rect[3] - 0.5
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _rig_point(uu, vv, iv, rot, tr, fx, fy, cx, cy):
+    """Rig-frame point of source pixel (uu, vv) at inverse depth iv: ``R^T (X_s - T)``."""
+    dx = (uu - cx) / fx / iv - tr[0]
+    dy = (vv - cy) / fy / iv - tr[1]
+    dz = 1.0 / iv - tr[2]
+    return (rot[0, 0] * dx + rot[1, 0] * dy + rot[2, 0] * dz,
+            rot[0, 1] * dx + rot[1, 1] * dy + rot[2, 1] * dz,
+            rot[0, 2] * dx + rot[1, 2] * dy + rot[2, 2] * dz)
+
+
+def _setup_rays(rects, planes, src_k, rot, tr, sign, r0, fa, fb, width, height, plane_rig, bbox):
+    """Per quad: rig-frame plane ``[nx, ny, nz, off]`` and target bounds [ulo, vlo, uhi, vhi]
+    (ulo/uhi may lie outside [0, W): columns wrap modulo W). Empty quads get ulo > uhi."""
+    fx, fy, cx, cy = src_k[0], src_k[1], src_k[2], src_k[3]
+    for q in prange(rects.shape[0]):
+        a, b, c = planes[q, 0], planes[q, 1], planes[q, 2]
+        ncx, ncy, ncz = a * fx, b * fy, a * cx + b * cy + c  # n_cam: n_cam . X_s = 1
+        # n = R^T n_cam, off = 1 - n_cam . T
+        nx = rot[0, 0] * ncx + rot[1, 0] * ncy + rot[2, 0] * ncz
+        ny = rot[0, 1] * ncx + rot[1, 1] * ncy + rot[2, 1] * ncz
+        nz = rot[0, 2] * ncx + rot[1, 2] * ncy + rot[2, 2] * ncz
+        off = 1.0 - (ncx * tr[0] + ncy * tr[1] + ncz * tr[2])
+        plane_rig[q, 0] = nx
+        plane_rig[q, 1] = ny
+        plane_rig[q, 2] = nz
+        plane_rig[q, 3] = off
+        if not (off + math.hypot(nx, nz) * abs(r0) > 0.0):  # every ray origin behind the plane
+            bbox[q, 0], bbox[q, 1], bbox[q, 2], bbox[q, 3] = 1, 0, 0, -1
+            continue
+        u0, v0, u1, v1 = rects[q, 0] - 0.5, rects[q, 1] - 0.5, rects[q, 2] - 0.5, rects[q, 3] - 0.5
+        cu = (u0, u1, u1, u0, u0)
+        cv = (v0, v0, v1, v1, v0)
+        umin, umax, vmin, vmax = 1e30, -1e30, 1e30, -1e30
+        prev_u = 0.0
+        first = True
+        full = False
+        for e in range(4):
+            # corner points (rig frame) of this edge; source camera: X_s = p * z, p = ((u-cx)/fx, ...)
+            ua, va, ub, vb = cu[e], cv[e], cu[e + 1], cv[e + 1]
+            ia = a * ua + b * va + c
+            ib = a * ub + b * vb + c
+            if not (ia > 0.0 and ib > 0.0):
+                full = True
+                break
+            # angle-based sample count: endpoints as seen from the rig centre
+            ax, ay, az = _rig_point(ua, va, ia, rot, tr, fx, fy, cx, cy)
+            bx, by, bz = _rig_point(ub, vb, ib, rot, tr, fx, fy, cx, cy)
+            la = math.sqrt(ax * ax + ay * ay + az * az)
+            lb = math.sqrt(bx * bx + by * by + bz * bz)
+            cosang = (ax * bx + ay * by + az * bz) / max(la * lb, 1e-300)
+            ang = math.acos(min(1.0, max(-1.0, cosang)))
+            n = int(min(2048.0, ang * width / (2.0 * math.pi) / 2.0)) + 1
+            for i in range(n):
+                s = i / n
+                # the edge is straight in the source image and on the plane: interpolate in
+                # source pixel coordinates, then unproject with the plane's inverse depth
+                uu = ua + s * (ub - ua)
+                vv = va + s * (vb - va)
+                iv = a * uu + b * vv + c
+                px, py, pz = _rig_point(uu, vv, iv, rot, tr, fx, fy, cx, cy)
+                pu, pv, ok = _project(px, py, pz, sign, r0, fa, fb, width, height)
+                if not ok:
+                    full = True
+                    break
+                if first:
+                    first = False
+                else:  # unwrap across the seam relative to the previous sample
+                    pu += width * round((prev_u - pu) / width)
+                prev_u = pu
+                umin = min(umin, pu)
+                umax = max(umax, pu)
+                vmin = min(vmin, pv)
+                vmax = max(vmax, pv)
+            if full:
+                break
+        if full:
+            bbox[q, 0], bbox[q, 1], bbox[q, 2], bbox[q, 3] = 0, 0, width - 1, height - 1
+            continue
+        up = _pole_inside(nx, ny, nz, off, -1.0, rects[q], rot, tr, fx, fy, cx, cy)
+        down = _pole_inside(nx, ny, nz, off, 1.0, rects[q], rot, tr, fx, fy, cx, cy)
+        if up:
+            vmin = -0.5
+        if down:
+            vmax = height - 0.5
+        ulo = int(math.floor(umin)) - _PAD
+        uhi = int(math.ceil(umax)) + _PAD
+        if up or down or uhi - ulo + 1 >= width:
+            ulo, uhi = 0, width - 1
+        vlo = max(0, int(math.floor(vmin)) - _PAD)
+        vhi = min(height - 1, int(math.ceil(vmax)) + _PAD)
+        bbox[q, 0], bbox[q, 1], bbox[q, 2], bbox[q, 3] = ulo, vlo, uhi, vhi
+
+
+setup_rays = njit(cache=True, error_model="numpy", parallel=True)(_setup_rays)
+setup_rays_serial = njit(cache=True, error_model="numpy")(_setup_rays)
+
+
+def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band_start, band_quads,
+                 far_coord, rng, map_u, map_v, coverage, incid):
+    """Z-buffered ray casting of quads into a spherical camera, one band of rows per task.
+
+    rng (H, W) float32 receives the range along each pixel's unit ray from its own origin (NaN
+    uncovered); map_u/map_v the source pixel coordinates (far_coord uncovered); coverage bool;
+    incid the cosine between the source ray and the quad's plane normal (for blending weights).
+    clamp (Q, 4) uint8 [left, top, right, bottom]: clamp the sample position to the rect's outer
+    pixel centres on that side (as the pinhole rasterizer).
+    """
+    height, width = rng.shape
+    fx, fy, cx, cy = src_k[0], src_k[1], src_k[2], src_k[3]
+    nbands = band_start.shape[0] - 1
+    rows_per_band = (height + nbands - 1) // nbands
+    for band in prange(nbands):
+        r0 = band * rows_per_band
+        r1 = min(height, r0 + rows_per_band)
+        for v in range(r0, r1):
+            for u in range(width):
+                rng[v, u] = np.inf
+        for k in range(band_start[band], band_start[band + 1]):
+            q = band_quads[k]
+            nx, ny, nz, off = plane_rig[q, 0], plane_rig[q, 1], plane_rig[q, 2], plane_rig[q, 3]
+            inv_nn = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)  # |n| = |n_cam| (rotation)
+            eu0, ev0 = rects[q, 0] - 0.5, rects[q, 1] - 0.5
+            eu1, ev1 = rects[q, 2] - 0.5, rects[q, 3] - 0.5
+            su0, sv0 = float(rects[q, 0]), float(rects[q, 1])
+            su1, sv1 = float(rects[q, 2] - 1), float(rects[q, 3] - 1)
+            cl, ct, cr, cb = clamp[q, 0] != 0, clamp[q, 1] != 0, clamp[q, 2] != 0, clamp[q, 3] != 0
+            for v in range(max(bbox[q, 1], r0), min(bbox[q, 3] + 1, r1)):
+                slat, clat, sr = rows[v, 0], rows[v, 1], rows[v, 2]
+                for uw in range(bbox[q, 0], bbox[q, 2] + 1):
+                    u = uw % width
+                    slon, clon = cols[u, 0], cols[u, 1]
+                    ox, oz = sr * clon, -sr * slon
+                    side = nx * ox + nz * oz - off
+                    if not (side < 0.0):
+                        continue  # ray origin behind the plane: back-facing
+                    dx, dy, dz = clat * slon, -slat, clat * clon
+                    nd = nx * dx + ny * dy + nz * dz
+                    if not (nd > 0.0):
+                        continue
+                    t = -side / nd
+                    if not (t < rng[v, u]):
+                        continue
+                    px, py, pz = ox + t * dx, t * dy, oz + t * dz
+                    xs = rot[0, 0] * px + rot[0, 1] * py + rot[0, 2] * pz + tr[0]
+                    ys = rot[1, 0] * px + rot[1, 1] * py + rot[1, 2] * pz + tr[1]
+                    zs = rot[2, 0] * px + rot[2, 1] * py + rot[2, 2] * pz + tr[2]
+                    if not (zs > 0.0):
+                        continue
+                    us = fx * xs / zs + cx
+                    vs = fy * ys / zs + cy
+                    if not (us >= eu0 and us < eu1 and vs >= ev0 and vs < ev1):
+                        continue
+                    if cl and us < su0:
+                        us = su0
+                    if cr and us > su1:
+                        us = su1
+                    if ct and vs < sv0:
+                        vs = sv0
+                    if cb and vs > sv1:
+                        vs = sv1
+                    rng[v, u] = t
+                    incid[v, u] = inv_nn / math.sqrt(xs * xs + ys * ys + zs * zs)  # n_cam . X_s = 1
+                    map_u[v, u] = us
+                    map_v[v, u] = vs
+        for v in range(r0, r1):
+            for u in range(width):
+                if rng[v, u] < np.inf:
+                    coverage[v, u] = True
+                else:
+                    rng[v, u] = np.nan
+                    coverage[v, u] = False
+                    map_u[v, u] = far_coord
+                    map_v[v, u] = far_coord
+
+
+raster_rays = njit(cache=True, error_model="numpy", parallel=True)(_raster_rays)
+raster_rays_serial = njit(cache=True, error_model="numpy")(_raster_rays)

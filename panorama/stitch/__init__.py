@@ -1,0 +1,13 @@
+"""Stitched panoramas from posed RGB-D views: mono equirect/cubemap and omnidirectional stereo.
+
+In: posed RGB-D :class:`ibr.View` objects (a camera rig, an engine's six cube faces, a walk
+through a room) or one RGB-D panorama. Out: equirect or cubemap colour + depth with hole masks,
+and ODS eye pairs packed for VR players. Built on the quad-mesh renderer: exact ray casting into
+spherical cameras (:mod:`ibr.render.ray_raster`) and N-source blending (:mod:`ibr.render.blend`).
+"""
+
+from .rgbd import Stitched, stitch_rgbd, stitch_rgbd_cubemap
+from .rigs import cube_rig, equirect_camera, ods_cameras, ring_rig
+
+__all__ = ["Stitched", "cube_rig", "equirect_camera", "ods_cameras", "ring_rig", "stitch_rgbd",
+           "stitch_rgbd_cubemap"]

@@ -1,0 +1,88 @@
+"""Capture rigs and target cameras for stitching: cube-face and ring rigs, equirect and ODS eyes.
+
+Conventions of :mod:`panorama.directions`: rig frame x right, y down, z forward; yaw (longitude)
+0 looks at +z and grows toward +x. A rig's ``center`` is its capture point in the world frame.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ibr.base.camera import Camera
+from ibr.base.ray_camera import SphericalCamera
+
+from ..directions import WORLD_FROM_FACE
+
+__all__ = ["cube_rig", "equirect_camera", "ods_cameras", "ring_rig"]
+
+
+def _translation(center) -> np.ndarray:
+    c = np.asarray(center, dtype=np.float64).reshape(3)
+    if not np.all(np.isfinite(c)):
+        raise ValueError(f"center: expected a finite 3-vector, got {center!r}")
+    m = np.eye(4)
+    m[:3, 3] = c
+    return m
+
+
+def equirect_camera(width: int, *, center=(0.0, 0.0, 0.0)) -> SphericalCamera:
+    """Mono equirect camera of ``width x width/2`` pixels at ``center`` (world frame)."""
+    if isinstance(width, bool) or not isinstance(width, (int, np.integer)) or width < 2 or width % 2:
+        raise ValueError(f"width: expected an even integer >= 2, got {width!r}")
+    return SphericalCamera(int(width), int(width) // 2, "mono", world_from_rig=_translation(center))
+
+
+def ods_cameras(width: int, *, ipd: float = 0.064, fade_start_deg: float = 60.0, fade_end_deg: float = 80.0,
+                center=(0.0, 0.0, 0.0)) -> tuple[SphericalCamera, SphericalCamera]:
+    """(left, right) omnidirectional-stereo eye cameras (see :mod:`ibr.base.ray_camera`)."""
+    if isinstance(width, bool) or not isinstance(width, (int, np.integer)) or width < 2 or width % 2:
+        raise ValueError(f"width: expected an even integer >= 2, got {width!r}")
+    pose = _translation(center)
+    return tuple(SphericalCamera(int(width), int(width) // 2, eye, ipd, fade_start_deg, fade_end_deg, pose)
+                 for eye in ("left", "right"))
+
+
+def cube_rig(face_size: int, *, center=(0.0, 0.0, 0.0)) -> list[Camera]:
+    """Six 90-degree pinhole cameras at ``center``, faces in the order +x -x +y -y +z -z."""
+    if isinstance(face_size, bool) or not isinstance(face_size, (int, np.integer)) or face_size < 1:
+        raise ValueError(f"face_size: expected a positive integer, got {face_size!r}")
+    s = int(face_size)
+    cams = []
+    for rot in WORLD_FROM_FACE:
+        pose = _translation(center)
+        pose[:3, :3] = rot
+        cams.append(Camera(s / 2.0, s / 2.0, (s - 1) / 2.0, (s - 1) / 2.0, s, s, pose))
+    return cams
+
+
+def ring_rig(n: int, *, radius: float = 0.1, width: int = 640, height: int = 480, hfov_deg: float = 90.0,
+             vfov_deg: float | None = None, center=(0.0, 0.0, 0.0), pitches_deg=(0.0,)) -> list[Camera]:
+    """``n`` outward-facing pinhole cameras on a horizontal ring (a camera rig), per pitch.
+
+    Camera k sits at ``center + radius * (sin yaw_k, 0, cos yaw_k)`` with ``yaw_k = 360 k / n``
+    degrees and looks outward at that yaw, tilted by each of ``pitches_deg`` (positive up).
+    ``vfov_deg`` (optional) sets fy independently (default: square pixels).
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n: expected a positive integer, got {n!r}")
+    if not (math.isfinite(radius) and radius >= 0):
+        raise ValueError(f"radius: expected a finite distance >= 0, got {radius!r}")
+    c = np.asarray(center, dtype=np.float64)
+    cams = []
+    for pitch in pitches_deg:
+        for k in range(int(n)):
+            yaw = 2 * math.pi * k / n
+            p = math.radians(pitch)
+            ry = np.array([[math.cos(yaw), 0, math.sin(yaw)], [0, 1, 0], [-math.sin(yaw), 0, math.cos(yaw)]])
+            rx = np.array([[1, 0, 0], [0, math.cos(p), -math.sin(p)], [0, math.sin(p), math.cos(p)]])
+            pose = np.eye(4)
+            pose[:3, :3] = ry @ rx
+            pose[:3, 3] = c + radius * np.array([math.sin(yaw), 0.0, math.cos(yaw)])
+            cam = Camera.from_fov(width, height, hfov_deg=hfov_deg, world_from_cam=pose)
+            if vfov_deg is not None:
+                fy = height / (2 * math.tan(math.radians(vfov_deg) / 2))
+                cam = Camera(cam.fx, fy, cam.cx, cam.cy, width, height, pose)
+            cams.append(cam)
+    return cams
