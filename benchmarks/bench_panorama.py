@@ -125,6 +125,9 @@ def photo_equirect():
     return np.ascontiguousarray(left[66:66 + h, 2:2 + 2 * h])  # 736 x 368, 2:1, native pixels
 
 
+RESULTS = Path(__file__).resolve().parent / "results"  # `ibr bench --out DIR` points this elsewhere
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="1024x512 / 256 px faces, 3 repeats")
@@ -245,8 +248,8 @@ def main(argv=None):
               f"{r['py'] / r['ours']:8.2f} {r['ours'] / r['bare']:9.2f} {r['cold_ours'] * 1e3:10.0f} "
               f"{r['cold_py'] * 1e3:8.0f}")
 
-    out_dir = Path(__file__).resolve().parent / "results"
-    out_dir.mkdir(exist_ok=True)
+    out_dir = RESULTS
+    out_dir.mkdir(parents=True, exist_ok=True)
     try:
         import matplotlib
         matplotlib.use("Agg")

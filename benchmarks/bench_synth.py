@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"  # `ibr bench --out DIR` points this elsewhere
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
@@ -57,7 +58,7 @@ def main(argv=None) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        out = ROOT / "benchmarks" / "results"
+        out = RESULTS
         out.mkdir(parents=True, exist_ok=True)
         fig, ax = plt.subplots(figsize=(7, 3.2))
         labels = [f"{r[0]}\n{r[2]}" for r in rows]

@@ -35,3 +35,87 @@ def progress(items: Iterable[T], total: int, label: str) -> Iterator[T]:
             sys.stderr.flush()
         else:
             info(f"{label} {i}/{total} ({elapsed:.1f}s)")
+
+
+# --------------------------------------------------------------------------- parse-time ranges
+# argparse ``type=`` callables: a bad value is a usage error (exit 2) naming the option, before any
+# file is read or written (#12).
+def _number(text: str, kind):
+    import argparse
+    import math
+
+    try:
+        value = kind(text)
+    except (TypeError, ValueError):
+        raise argparse.ArgumentTypeError(f"expected {'an integer' if kind is int else 'a number'}, "
+                                         f"got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def number_in(lo=None, hi=None, *, integer: bool = False, lo_open: bool = False, hi_open: bool = False,
+              what: str = ""):
+    """An argparse type: a finite number (or integer) in [lo, hi] (``lo_open``/``hi_open``: that
+    end excluded)."""
+    import argparse
+
+    def parse(text: str):
+        value = _number(text, int if integer else float)
+        if ((lo is not None and (value < lo or (lo_open and value == lo)))
+                or (hi is not None and (value > hi or (hi_open and value == hi)))):
+            lo_s = "" if lo is None else f"{'>' if lo_open else '>='} {lo:g}"
+            hi_s = "" if hi is None else f"{'<' if hi_open else '<='} {hi:g}"
+            rng = " and ".join(x for x in (lo_s, hi_s) if x)
+            raise argparse.ArgumentTypeError(f"expected {what or ('an integer' if integer else 'a number')} "
+                                             f"{rng}, got {text}")
+        return value
+
+    parse.__name__ = "integer" if integer else "number"
+    return parse
+
+
+def _max_side():
+    from ibr.base.validate import MAX_IMAGE_SIDE
+
+    return MAX_IMAGE_SIDE
+
+
+finite_float = number_in()
+positive_float = number_in(0, lo_open=True, what="a positive number")
+nonnegative_float = number_in(0, what="a number")
+positive_int = number_in(1, integer=True, what="an integer")
+nonnegative_int = number_in(0, integer=True, what="an integer")
+#: An image side in pixels: 1 .. MAX_IMAGE_SIDE (the pixel and byte ceilings are checked later,
+#: when the other side and the channels are known).
+image_side = number_in(1, _max_side(), integer=True, what="a size in pixels")
+#: A TCP port: 1..65535, or 0 for any free port.
+port_number = number_in(0, 65535, integer=True, what="a port (0 = any free one)")
+#: Frame rates for videos and animations.
+frame_rate = number_in(0, 1000, lo_open=True, what="a frame rate")
+#: Frame counts (every frame is kept in memory for videos and contact sheets).
+frame_count = number_in(1, 100000, integer=True, what="a number of frames")
+
+
+class terminate_as_interrupt:
+    """Context manager: while active (main thread only), SIGTERM raises KeyboardInterrupt, so the
+    ``finally`` blocks that clean up temporary folders run for ``kill`` as they do for Ctrl-C."""
+
+    def __enter__(self):
+        import signal
+        import threading
+
+        self._old = None
+        if threading.current_thread() is threading.main_thread():
+            def _raise(signum, frame):
+                raise KeyboardInterrupt(f"terminated (signal {signum})")
+
+            self._old = signal.signal(signal.SIGTERM, _raise)
+        return self
+
+    def __exit__(self, *exc):
+        import signal
+
+        if self._old is not None:
+            signal.signal(signal.SIGTERM, self._old)
+        return False

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._common import info
+from ._common import image_side, info
 
 HELP = "convert an equirectangular panorama to cube faces (any layout) and back; color or depth"
 
@@ -17,17 +17,18 @@ def add_arguments(parser) -> None:
                         "4:3 dice) or a folder of px/nx/py/ny/pz/nz face files")
     parser.add_argument("-o", "--output", required=True,
                         help="output image (extension picks the format: .png 8/16-bit, .tif, .exr "
-                        "float) or, for --layout files, a folder")
+                        "float) or, for --layout files, a folder (face files of an earlier run there "
+                        "are replaced, other files left alone)")
     parser.add_argument("--layout", choices=_LAYOUTS, default=None,
                         help="cube layout of the output (default: files if OUTPUT has no "
                         "extension, else dice)")
     parser.add_argument("--input-layout", default=None,
                         choices=("equirect",) + _LAYOUTS[:3] + _LAYOUTS[4:],
                         help="layout of INPUT (default: from its shape; folders are face files)")
-    parser.add_argument("--face-size", type=int, default=None,
+    parser.add_argument("--face-size", type=image_side, default=None,
                         help="face edge in pixels (default: ceil(width / pi), full resolution at "
                         "the face centres)")
-    parser.add_argument("--width", type=int, default=None,
+    parser.add_argument("--width", type=image_side, default=None,
                         help="equirect width when converting back (default 4 x face size); height "
                         "is width / 2")
     parser.add_argument("--depth", action="store_true",
@@ -42,28 +43,54 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     import panorama
     from ibr.io import write_image
-    from panorama.files import read_panorama, write_cubemap
+    from ibr.io.outputs import IMAGE_EXTS, OutputPlan
+    from panorama.directions import FACE_FILE_NAMES
+    from panorama.files import FACE_EXTS, read_panorama, write_cubemap
 
-    pano, in_layout = read_panorama(args.input, layout=args.input_layout)
     out = Path(args.output)
-    if in_layout == "equirect":
-        h, w = pano.shape[:2]
-        size = args.face_size if args.face_size is not None else math.ceil(w / math.pi)
-        layout = args.layout or ("files" if out.suffix == "" else "dice")
-        faces = panorama.equirect_to_cubemap(pano, size, layout="list", depth=args.depth,
-                                             interpolation=args.interpolation)
-        ext = args.ext if args.ext.startswith(".") else "." + args.ext
-        written = write_cubemap(out, faces, layout=layout, ext=ext)
-        info(f"cubemap: {w}x{h} equirect -> {layout} faces of {size}px: "
-             f"{', '.join(map(str, written)) if len(written) < 3 else str(out) + '/'}")
-    else:
-        faces = panorama.unpack_faces(pano, in_layout)
-        s = faces[0].shape[0]
-        width = args.width if args.width is not None else 4 * s
-        if width < 2 or width % 2:
-            raise ValueError(f"--width: expected an even number >= 2 (height = width / 2), got {width}")
-        eq = panorama.cubemap_to_equirect(faces, width, width // 2, layout="list", depth=args.depth,
-                                          interpolation=args.interpolation)
-        write_image(out, eq)
-        info(f"cubemap: {in_layout} faces of {s}px -> {width}x{width // 2} equirect: {out}")
+    ext = args.ext if args.ext.startswith(".") else "." + args.ext
+    if ext.lower() not in FACE_EXTS:
+        raise ValueError(f"--ext: expected one of {', '.join(FACE_EXTS)}, got {args.ext!r}")
+    float_exts = (".exr", ".tif", ".tiff", ".pfm")
+    with OutputPlan("ibr cubemap", log=info) as plan:
+        plan.add_input("INPUT", args.input)
+        # the layout of the output is known before reading: folder of faces or one image
+        files_out = args.layout == "files" or (args.layout is None and out.suffix == "")
+        if files_out:
+            if args.depth and ext.lower() not in float_exts:
+                raise ValueError(f"--ext: depth faces are float; use one of {', '.join(float_exts)}, got {ext}")
+            target = plan.add_folder("-o", out, tuple(f"{n}.*" for n in FACE_FILE_NAMES))
+        else:
+            if args.depth and out.suffix.lower() not in float_exts:
+                raise ValueError(f"-o: depth is float; use one of {', '.join(float_exts)}, got {out.name}")
+            target = plan.add_file("-o", out, IMAGE_EXTS)
+        plan.check()  # every output checked before any work (#12)
+
+        pano, in_layout = read_panorama(args.input, layout=args.input_layout)
+        if in_layout == "equirect":
+            h, w = pano.shape[:2]
+            size = args.face_size if args.face_size is not None else math.ceil(w / math.pi)
+            layout = args.layout or ("files" if out.suffix == "" else "dice")
+            faces = panorama.equirect_to_cubemap(pano, size, layout="list", depth=args.depth,
+                                                 interpolation=args.interpolation)
+            staged = plan.stage(target)
+            write_cubemap(staged, faces, layout=layout, ext=ext)
+            plan.commit()
+            written = [out / f"{n}{ext}" for n in FACE_FILE_NAMES] if files_out else [out]
+            info(f"cubemap: {w}x{h} equirect -> {layout} faces of {size}px: "
+                 f"{', '.join(map(str, written)) if len(written) < 3 else str(out) + '/'}")
+        else:
+            if files_out:
+                raise ValueError(f"-o: {out} names a face folder, but INPUT is already a cubemap; converting "
+                                 "back writes one equirect image (give -o a file name such as pano.png)")
+            faces = panorama.unpack_faces(pano, in_layout)
+            s = faces[0].shape[0]
+            width = args.width if args.width is not None else 4 * s
+            if width < 2 or width % 2:
+                raise ValueError(f"--width: expected an even number >= 2 (height = width / 2), got {width}")
+            eq = panorama.cubemap_to_equirect(faces, width, width // 2, layout="list", depth=args.depth,
+                                              interpolation=args.interpolation)
+            write_image(plan.stage(target), eq)
+            plan.commit()
+            info(f"cubemap: {in_layout} faces of {s}px -> {width}x{width // 2} equirect: {out}")
     return 0

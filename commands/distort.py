@@ -14,53 +14,57 @@ HELP = "radial lens pre-distortion (c1, c2; per-channel for chromatic aberration
 
 
 def add_arguments(parser) -> None:
+    from commands._common import finite_float, positive_float
+
     parser.add_argument("image", metavar="IMAGE", help="input image")
-    parser.add_argument("--c1", type=float, required=True, help="cubic coefficient (> 0 pincushion lens)")
-    parser.add_argument("--c2", type=float, default=0.0, help="quintic coefficient (default: 0)")
+    parser.add_argument("--c1", type=finite_float, required=True, help="cubic coefficient (> 0 pincushion lens)")
+    parser.add_argument("--c2", type=finite_float, default=0.0, help="quintic coefficient (default: 0)")
     parser.add_argument("--inverse", action="store_true", help="undo the pre-distortion (exact inverse)")
-    parser.add_argument("--r-max", type=float, default=1.5, help="lens range in normalized radius (default: 1.5)")
-    parser.add_argument("--scale", type=float, default=None, metavar="PX",
+    parser.add_argument("--r-max", type=positive_float, default=1.5, help="lens range in normalized radius (default: 1.5)")
+    parser.add_argument("--scale", type=positive_float, default=None, metavar="PX",
                         help="pixels per unit normalized radius (default: half the eye image width)")
-    parser.add_argument("--center", type=float, nargs=2, default=None, metavar=("U", "V"),
+    parser.add_argument("--center", type=finite_float, nargs=2, default=None, metavar=("U", "V"),
                         help="lens center in pixels (default: image center)")
-    parser.add_argument("--chromatic", type=float, nargs=2, default=None, metavar=("RED", "BLUE"),
+    parser.add_argument("--chromatic", type=positive_float, nargs=2, default=None, metavar=("RED", "BLUE"),
                         help="scale c1, c2 by these factors for the red and blue channels (green uses c1, c2)")
     parser.add_argument("--sbs", action="store_true", help="side-by-side stereo input: each half is one eye")
-    parser.add_argument("--centers", type=float, nargs=4, default=None, metavar=("UL", "VL", "UR", "VR"),
+    parser.add_argument("--centers", type=finite_float, nargs=4, default=None, metavar=("UL", "VL", "UR", "VR"),
                         help="--sbs: lens centers in each eye image's pixels")
-    parser.add_argument("-o", "--out", required=True, metavar="OUT", help="output image")
+    parser.add_argument("-o", "--out", required=True, metavar="OUT",
+                        help="output image (.png, .jpg, .tif, .exr, .pfm; the input's dtype must fit)")
 
 
 def run(args) -> int:
-    from pathlib import Path
-
     import numpy as np
 
     from commands._common import info
     from ibr.io import read_image, write_image
+    from ibr.io.outputs import IMAGE_EXTS, OutputPlan
     from ibr.stereo.lens import RadialDistortion, predistort, predistort_stereo
 
-    out = Path(args.out)
-    if Path(args.image).resolve() == out.resolve():
-        raise ValueError("--out: refusing to overwrite the input image")
-    lens = RadialDistortion(args.c1, args.c2, args.r_max)
-    if args.chromatic is not None:
-        kr, kb = args.chromatic
-        lens = (RadialDistortion(args.c1 * kr, args.c2 * kr, args.r_max), lens,
-                RadialDistortion(args.c1 * kb, args.c2 * kb, args.r_max))
-    img = read_image(args.image)
-    if args.sbs:
-        w = img.shape[1]
-        if w % 2:
-            raise ValueError(f"IMAGE: --sbs needs an even width, got {w}")
-        centers = None if args.centers is None else np.array(args.centers).reshape(2, 2)
-        left, right = predistort_stereo(img[:, : w // 2], img[:, w // 2 :], lens, centers_px=centers,
-                                        scale_px=args.scale, inverse=args.inverse)
-        result = np.concatenate([left, right], axis=1)
-    else:
-        if args.centers is not None:
-            raise ValueError("--centers: only with --sbs (use --center for one image)")
-        result = predistort(img, lens, center_px=args.center, scale_px=args.scale, inverse=args.inverse)
-    write_image(out, result)
+    if args.centers is not None and not args.sbs:
+        raise ValueError("--centers: only with --sbs (use --center for one image)")
+    with OutputPlan("ibr distort", log=info) as plan:
+        plan.add_input("IMAGE", args.image)
+        out = plan.add_file("-o", args.out, IMAGE_EXTS)
+        plan.check()  # every output checked before any work (#12)
+        lens = RadialDistortion(args.c1, args.c2, args.r_max)
+        if args.chromatic is not None:
+            kr, kb = args.chromatic
+            lens = (RadialDistortion(args.c1 * kr, args.c2 * kr, args.r_max), lens,
+                    RadialDistortion(args.c1 * kb, args.c2 * kb, args.r_max))
+        img = read_image(args.image)
+        if args.sbs:
+            w = img.shape[1]
+            if w % 2:
+                raise ValueError(f"IMAGE: --sbs needs an even width, got {w}")
+            centers = None if args.centers is None else np.array(args.centers).reshape(2, 2)
+            left, right = predistort_stereo(img[:, : w // 2], img[:, w // 2 :], lens, centers_px=centers,
+                                            scale_px=args.scale, inverse=args.inverse)
+            result = np.concatenate([left, right], axis=1)
+        else:
+            result = predistort(img, lens, center_px=args.center, scale_px=args.scale, inverse=args.inverse)
+        write_image(plan.stage(out), result)
+        plan.commit()
     info(f"distort: {'inverse' if args.inverse else 'pre-distortion'} c1={args.c1}, c2={args.c2} -> {out}")
     return 0

@@ -13,16 +13,20 @@ SAMPLE_SCENE = "clutter"
 
 
 def add_arguments(parser) -> None:
+    from commands._common import finite_float, frame_count, frame_rate
+
     parser.add_argument("views", nargs="*", metavar="VIEW.json",
                         help="two view files A and B (default: the bundled sample pair)")
     where = parser.add_mutually_exclusive_group()
-    where.add_argument("--frames", type=int, metavar="N",
+    where.add_argument("--frames", type=frame_count, metavar="N",
                        help="N frames evenly spaced from A to B, both included (t = i / (N - 1))")
-    where.add_argument("--t", type=float, nargs="+", metavar="T",
+    where.add_argument("--t", type=finite_float, nargs="+", metavar="T",
                        help="interpolation parameters (0 = A, 1 = B; default 0.25 0.5 0.75)")
     parser.add_argument("--scene", default=None, metavar="NAME",
                         help=f"bundled sample scene when no view files are given (default {SAMPLE_SCENE})")
-    parser.add_argument("--out", default="out", metavar="DIR", help="output folder (default: %(default)s)")
+    parser.add_argument("--out", default="out", metavar="DIR",
+                        help="output folder (default: %(default)s); frames of an earlier run there "
+                             "(frame_*_t*.png/.exr) are replaced, other files are left alone")
     parser.add_argument("--fill", choices=("previous", "inpaint", "none"), default="previous",
                         help="hole filling: previous frame (seed step 7, default), depth-aware "
                              "background fill, or none")
@@ -32,11 +36,16 @@ def add_arguments(parser) -> None:
                         help="depth-aware blend (default) or the seed's nearer-source-in-front order")
     parser.add_argument("--format", choices=("png", "exr"), default="png",
                         help="frame format: png (the sources' 8/16-bit) or exr (float32)")
-    parser.add_argument("--video", metavar="OUT.mp4", help="also write the frames as a video (OpenCV writer)")
-    parser.add_argument("--fps", type=float, default=24.0, help="video frame rate (default %(default)s)")
-    parser.add_argument("--contact-sheet", metavar="SHEET.png", help="also write a contact sheet of all frames")
+    parser.add_argument("--video", metavar="OUT.mp4",
+                        help="also write the frames as a video (OpenCV writer; .mp4, .m4v, .mov, .avi)")
+    parser.add_argument("--fps", type=frame_rate, default=24.0, help="video frame rate (default %(default)s)")
+    parser.add_argument("--contact-sheet", metavar="SHEET.png",
+                        help="also write a contact sheet of all frames (.png, .jpg, .tif)")
     parser.add_argument("--holes", action="store_true",
                         help="also write each frame's hole mask (holes before filling) as a PNG")
+    from commands._sequence import add_interpolate_arguments  # sequences: VIEW.json is a SEQ (#15)
+
+    add_interpolate_arguments(parser)
 
 
 def _sample_pair(scene):
@@ -144,6 +153,11 @@ def write_video(path, frames, fps: float) -> None:
             writer.release()
 
 
+#: File-name patterns of the frames this command writes into ``--out`` (and removes from an
+#: earlier run there); nothing else in the folder is touched.
+FRAME_PATTERNS = ("frame_*_t*.png", "frame_*_t*.exr")
+
+
 def run(args) -> int:
     import time
     from pathlib import Path
@@ -151,9 +165,13 @@ def run(args) -> int:
     import numpy as np
 
     from commands._common import info, progress
+    from ibr.io import load_view, write_image
+    from ibr.io.outputs import OutputPlan, VIDEO_EXTS
     from ibr.render.view_synthesis import iter_interpolate, source_mesh
-    from ibr.io import atomic_path, load_view, write_image
+    from commands._sequence import is_sequence_argument, run_interpolate  # sequences (#15)
 
+    if len(args.views) == 1 and is_sequence_argument(args.views[0]):
+        return run_interpolate(args)
     truth_paths = {}
     if not args.views:
         path_a, path_b, truth_paths = _sample_pair(args.scene)
@@ -174,50 +192,61 @@ def run(args) -> int:
     for t in ts:
         if not np.isfinite(t):
             raise ValueError(f"--t: expected finite numbers, got {t}")
+    if not (isinstance(args.fps, (int, float)) and np.isfinite(args.fps) and args.fps > 0):
+        raise ValueError(f"--fps: expected a positive frame rate, got {args.fps}")
 
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out: {out} exists and is not a folder")
-    view_a, view_b = load_view(path_a), load_view(path_b)
-    out.mkdir(parents=True, exist_ok=True)
+    with OutputPlan("ibr interpolate", log=info) as plan:
+        plan.add_view_input("A", path_a)
+        plan.add_view_input("B", path_b)
+        for truth in truth_paths.values():
+            plan.add_view_input("ground truth", truth)
+        out = plan.add_folder("--out", args.out, FRAME_PATTERNS)
+        video = plan.add_file("--video", args.video, VIDEO_EXTS)
+        sheet = plan.add_file("--contact-sheet", args.contact_sheet, (".png", ".jpg", ".jpeg", ".tif", ".tiff"))
+        plan.check()  # every output checked before any work (#12)
+        view_a, view_b = load_view(path_a), load_view(path_b)
 
-    if args.method == "mesh":
-        t0 = time.perf_counter()
-        mesh_a, mesh_b = source_mesh(view_a), source_mesh(view_b)
-        info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads, built in {(time.perf_counter() - t0) * 1e3:.1f} ms "
-             "(once; reused for every frame)")
+        if args.method == "mesh":
+            t0 = time.perf_counter()
+            mesh_a, mesh_b = source_mesh(view_a), source_mesh(view_b)
+            info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads, built in {(time.perf_counter() - t0) * 1e3:.1f} ms "
+                 "(once; reused for every frame)")
 
-    frames_iter = iter_interpolate(view_a, view_b, ts, method=args.method, composite_mode=args.composite,
-                                   fill=args.fill)
-    long_run = len(ts) > 10
-    if long_run:
-        frames_iter = progress(frames_iter, len(ts), "interpolate")
-    times, colors, labels, scores = [], [], [], []
-    ext = "." + args.format
-    t_prev = time.perf_counter()
-    for i, (frame, t) in enumerate(zip(frames_iter, ts)):  # frames first: the bar draws its last step
-        dt = time.perf_counter() - t_prev
-        times.append(dt)
-        name = f"frame_{i:03d}_t{t:.3f}"
-        color = _to_float(frame.color) if args.format == "exr" else _to_png(frame.color)
-        with atomic_path(out / (name + ext)) as tmp:
-            write_image(tmp, color)
-        if args.holes:
-            with atomic_path(out / (name + "_holes.png")) as tmp:
-                write_image(tmp, (frame.holes * 255).astype(np.uint8))
-        line = (f"frame {i + 1}/{len(ts)} t={t:.3f}: {dt * 1e3:6.1f} ms, holes {frame.hole_fraction:.3%} "
-                f"(filled {frame.filled.mean():.3%})")
-        truth = next((p for tt, p in truth_paths.items() if abs(tt - t) < 1e-9), None)
-        if truth is not None:
-            gt = load_view(truth).color
-            psnr, ssim = _metrics(frame.color, gt)
-            scores.append((psnr, ssim))
-            line += f", PSNR {psnr:.2f} dB, SSIM {ssim:.4f} vs {truth.name}"
-        if not long_run:
-            info(line)
-        colors.append(frame.color)
-        labels.append(f"t={t:.3f}")
+        frames_iter = iter_interpolate(view_a, view_b, ts, method=args.method, composite_mode=args.composite,
+                                       fill=args.fill)
+        long_run = len(ts) > 10
+        if long_run:
+            frames_iter = progress(frames_iter, len(ts), "interpolate")
+        times, colors, labels, scores = [], [], [], []
+        ext = "." + args.format
         t_prev = time.perf_counter()
+        for i, (frame, t) in enumerate(zip(frames_iter, ts)):  # frames first: the bar draws its last step
+            dt = time.perf_counter() - t_prev
+            times.append(dt)
+            name = f"frame_{i:03d}_t{t:.3f}"
+            color = _to_float(frame.color) if args.format == "exr" else _to_png(frame.color)
+            write_image(plan.stage(out, name + ext), color)
+            if args.holes:
+                write_image(plan.stage(out, name + "_holes.png"), (frame.holes * 255).astype(np.uint8))
+            line = (f"frame {i + 1}/{len(ts)} t={t:.3f}: {dt * 1e3:6.1f} ms, holes {frame.hole_fraction:.3%} "
+                    f"(filled {frame.filled.mean():.3%})")
+            truth = next((p for tt, p in truth_paths.items() if abs(tt - t) < 1e-9), None)
+            if truth is not None:
+                gt = load_view(truth).color
+                psnr, ssim = _metrics(frame.color, gt)
+                scores.append((psnr, ssim))
+                line += f", PSNR {psnr:.2f} dB, SSIM {ssim:.4f} vs {truth.name}"
+            if not long_run:
+                info(line)
+            colors.append(frame.color)
+            labels.append(f"t={t:.3f}")
+            t_prev = time.perf_counter()
+
+        if video:
+            write_video(plan.stage(video), colors, args.fps)
+        if sheet:
+            write_image(plan.stage(sheet), contact_sheet(colors, labels))
+        plan.commit()  # frames, video and sheet appear together, or not at all
 
     first = f"first frame {times[0] * 1e3:.1f} ms"
     if len(times) > 1 and times[0] > 10 * np.median(times[1:]):
@@ -226,12 +255,8 @@ def run(args) -> int:
     if scores:
         p = np.array(scores)
         info(f"ground truth: mean PSNR {p[:, 0].mean():.2f} dB, mean SSIM {p[:, 1].mean():.4f} over {len(p)} frames")
-    if args.video:
-        write_video(args.video, colors, args.fps)
-        info(f"wrote video {args.video}")
-    if args.contact_sheet:
-        sheet = contact_sheet(colors, labels)
-        with atomic_path(Path(args.contact_sheet)) as tmp:
-            write_image(tmp, sheet)
-        info(f"wrote contact sheet {args.contact_sheet}")
+    if video:
+        info(f"wrote video {video}")
+    if sheet:
+        info(f"wrote contact sheet {sheet}")
     return 0

@@ -13,13 +13,15 @@ METHODS = ("edge", "separate", "paper")
 
 
 def add_arguments(parser) -> None:
+    from commands._common import number_in, positive_float
+
     parser.add_argument("view", metavar="VIEW.json", help="view file with depth")
     lod = parser.add_mutually_exclusive_group()
-    lod.add_argument("--threshold", type=float, metavar="T",
+    lod.add_argument("--threshold", type=positive_float, metavar="T",
                      help="level of detail in 24-bit z' units (the seed's 2^15 = 32768, 2^11 = 2048)")
-    lod.add_argument("--max-error", type=float, metavar="PX", dest="max_error",
+    lod.add_argument("--max-error", type=positive_float, metavar="PX", dest="max_error",
                      help="max reprojection error in pixels for a move of one baseline (default 0.5)")
-    parser.add_argument("--baseline", type=float, metavar="B",
+    parser.add_argument("--baseline", type=positive_float, metavar="B",
                         help="camera move for --max-error, scene units (default 5%% of the median depth)")
     parser.add_argument("--method", choices=METHODS, default="edge",
                         help="edge (default: edge-aware, error-bounded), separate, or paper (faithful seed 002)")
@@ -28,8 +30,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--frame", choices=("cam", "world"), default="cam",
                         help="vertex coordinates of the exports (default: source camera frame)")
     parser.add_argument("--viz", metavar="SEG.png", help="write the segmentation drawn over the image")
-    parser.add_argument("--viz-scale", type=int, default=1, metavar="N",
-                        help="upscale the segmentation picture N times (default 1)")
+    parser.add_argument("--viz-scale", type=number_in(1, 64, integer=True, what="a scale"), default=1, metavar="N",
+                        help="upscale the segmentation picture N times (1..64, default 1)")
 
 
 def run(args) -> int:
@@ -38,57 +40,70 @@ def run(args) -> int:
     from pathlib import Path
 
     from commands._common import info
+    from ibr.base.validate import check_image_size
     from ibr.io import load_view, write_image
-    from ibr.mesh.quad_mesh import build_mesh
     from ibr.io.mesh_files import write_obj, write_ply, write_segmentation_png
+    from ibr.io.outputs import OutputPlan
+    from ibr.mesh.quad_mesh import build_mesh
 
-    for name in ("obj", "ply", "viz"):
-        out = getattr(args, name)
-        if out is not None:
-            folder = Path(out).parent
-            if str(folder) and not folder.is_dir():
-                raise FileNotFoundError(f"--{name}: output folder {folder} does not exist")
-            if Path(out).resolve() == Path(args.view).resolve():
-                raise ValueError(f"--{name}: refusing to overwrite the input view file {out}")
+    with OutputPlan("ibr mesh", log=info) as plan:
+        plan.add_view_input("VIEW", args.view)
+        obj = plan.add_file("--obj", args.obj, (".obj",))
+        ply = plan.add_file("--ply", args.ply, (".ply",))
+        viz = plan.add_file("--viz", args.viz, (".png",))
+        texture = mtl = None
+        if obj or ply:
+            # the texture is the view's color image, copied next to the mesh as <stem>_texture.png
+            first = obj or ply
+            texture = plan.add_file(f"--{'obj' if obj else 'ply'} (its texture)",
+                                    first.parent / f"{first.stem}_texture.png", (".png",))
+        if obj:
+            mtl = plan.add_file("--obj (its material file)", obj.with_suffix(".mtl"), (".mtl",))
+        plan.check()  # every output checked before any work (#12)
 
-    view = load_view(args.view)
-    t0 = time.perf_counter()
-    mesh = build_mesh(view, threshold=args.threshold, max_error_px=args.max_error,
-                      baseline=args.baseline, method=args.method)
-    seconds = time.perf_counter() - t0
-    h, w = view.shape
-    i = mesh.info
-    info(f"mesh: {len(mesh)} quads for {w}x{h} pixels ({len(mesh) / (w * h):.2%} of pixels), "
-         f"one-pixel quads {mesh.one_pixel_share:.1%}, method {i['method']}")
-    if i["tolerance_inv_depth"] is not None:
-        bound = f"max |error in 1/z| {i['tolerance_inv_depth']:.4g}"
-        if i["max_error_px"] is not None:
-            bound += f" (= {i['max_error_px']:g} px for a baseline of {i['baseline']:.4g})"
-        info(f"mesh: guaranteed {bound}")
-    else:
-        info(f"mesh: threshold {i['threshold_zprime']:.6g} in z' units (near {i['near']:.4g}, far {i['far']:.4g})")
-    info(f"mesh: segmentation {i['seconds_segment'] * 1e3:.1f} ms, total {seconds * 1e3:.1f} ms "
-         "(first call includes loading the compiled kernels)")
+        view = load_view(args.view)
+        if viz:
+            check_image_size("--viz-scale", view.shape[1] * args.viz_scale, view.shape[0] * args.viz_scale,
+                             channels=3, itemsize=1)
+        t0 = time.perf_counter()
+        mesh = build_mesh(view, threshold=args.threshold, max_error_px=args.max_error,
+                          baseline=args.baseline, method=args.method)
+        seconds = time.perf_counter() - t0
+        h, w = view.shape
+        i = mesh.info
+        info(f"mesh: {len(mesh)} quads for {w}x{h} pixels ({len(mesh) / (w * h):.2%} of pixels), "
+             f"one-pixel quads {mesh.one_pixel_share:.1%}, method {i['method']}")
+        if i["tolerance_inv_depth"] is not None:
+            bound = f"max |error in 1/z| {i['tolerance_inv_depth']:.4g}"
+            if i["max_error_px"] is not None:
+                bound += f" (= {i['max_error_px']:g} px for a baseline of {i['baseline']:.4g})"
+            info(f"mesh: guaranteed {bound}")
+        else:
+            info(f"mesh: threshold {i['threshold_zprime']:.6g} in z' units (near {i['near']:.4g}, far {i['far']:.4g})")
+        info(f"mesh: segmentation {i['seconds_segment'] * 1e3:.1f} ms, total {seconds * 1e3:.1f} ms "
+             "(first call includes loading the compiled kernels)")
 
-    texture = None
-    if args.obj or args.ply:
-        # the texture is the view's color image, copied next to the mesh as <stem>_texture.png
-        first = Path(args.obj or args.ply)
-        texture = f"{first.stem}_texture.png"
-        color = view.color
-        if color.dtype.kind == "f":
-            import numpy as np
+        if texture:
+            color = view.color
+            if color.dtype.kind == "f":
+                import numpy as np
 
-            color = (np.clip(np.nan_to_num(color), 0, 1) * 255 + 0.5).astype(np.uint8)
-        write_image(first.parent / texture, color)
-    if args.obj:
-        n = write_obj(mesh, args.obj, texture=texture, frame=args.frame)
-        info(f"wrote {args.obj} ({n} quads, texture {texture})")
-    if args.ply:
-        n = write_ply(mesh, args.ply, texture=os.path.relpath(Path(args.obj or args.ply).parent / texture,
-                                                              Path(args.ply).parent), frame=args.frame)
-        info(f"wrote {args.ply} ({n} quads)")
-    if args.viz:
-        write_segmentation_png(mesh, view.color, args.viz, scale=args.viz_scale)
-        info(f"wrote {args.viz}")
+                color = (np.clip(np.nan_to_num(color), 0, 1) * 255 + 0.5).astype(np.uint8)
+            write_image(plan.stage(texture), color)
+        if obj:
+            n_obj = write_obj(mesh, plan.stage(obj), texture=texture.name, frame=args.frame)
+            if not plan.stage(mtl).is_file():
+                raise OSError(f"--obj: the material file {mtl} was not written")
+        if ply:
+            rel = os.path.relpath(texture, ply.parent)
+            n_ply = write_ply(mesh, plan.stage(ply), texture=rel, frame=args.frame)
+        if viz:
+            write_segmentation_png(mesh, view.color, plan.stage(viz), scale=args.viz_scale)
+        plan.commit()
+    if obj:
+        info(f"wrote {obj} ({n_obj} quads, texture {texture.name}, material {mtl.name})")
+    if ply:
+        info(f"wrote {ply} ({n_ply} quads)")
+    if viz:
+        info(f"wrote {viz}")
     return 0

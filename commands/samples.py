@@ -17,13 +17,34 @@ def add_arguments(parser) -> None:
                         help="output folder, created if missing (default: %(default)s)")
     parser.add_argument("--no-middlebury", action="store_true",
                         help="skip the Middlebury motorcycle pair")
+    from commands._sequence import add_samples_arguments  # --sequence: a synthetic sequence (#15)
+
+    add_samples_arguments(parser)
+
+
+def _referenced_names(view_json):
+    """The file names a bundled view file references (flat names in the sample folder)."""
+    import json
+    from pathlib import Path
+
+    doc = json.loads(Path(view_json).read_text(encoding="utf-8"))
+    refs = [doc["color"]] + ([doc["depth"]["path"]] if doc.get("depth") else [])
+    for rel in refs:
+        if Path(rel).name != rel:
+            raise ValueError(f"{view_json}: referenced file {rel!r} must be a plain name inside the sample folder")
+    return refs
 
 
 def run(args) -> int:
     from pathlib import Path
 
     from commands._common import info
+    from ibr.io.outputs import OutputPlan
 
+    if args.sequence:  # a synthetic sequence with its exact up-converted frames (#15)
+        from commands._sequence import run_samples_sequence
+
+        return run_samples_sequence(args)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out: {out} exists and is not a folder")
@@ -31,33 +52,44 @@ def run(args) -> int:
 
     if out.resolve() == DATA_DIR.resolve():
         raise ValueError(f"--out: {out} is the bundled data folder itself; choose another folder")
-    out.mkdir(parents=True, exist_ok=True)
 
-    written = []
     bundled = bundled_view_files()
-    if bundled:
-        written += [copy_view_file(p, out) for p in bundled]
-        manifest = bundled[0].parent / "manifest.json"
-        if manifest.is_file():  # scene pairs and ground-truth views (written by samples/generate.py)
-            import shutil
-
-            from ibr.io import atomic_path
-
-            with atomic_path(out / manifest.name) as tmp:
-                shutil.copyfile(manifest, tmp)
-    else:
-        info("samples: no bundled synthetic views found in samples/data")
+    manifest = DATA_DIR / "manifest.json"
+    names = []
+    for p in bundled:
+        names += [p.name] + _referenced_names(p)
+    if bundled and manifest.is_file():
+        names.append(manifest.name)
+    mb = ["motorcycle_left.json", "motorcycle_left_color.png", "motorcycle_left_disp.pfm",
+          "motorcycle_right.json", "motorcycle_right_color.png"]
     if not args.no_middlebury:
-        from ibr.io import save_view
-        from ibr.io.middlebury import MOTORCYCLE_CALIBRATION as C
-        from ibr.io.middlebury import motorcycle_views
+        names += mb
+    with OutputPlan("ibr samples", log=info) as plan:
+        plan.add_input("bundled samples", DATA_DIR)
+        folder = plan.add_folder("--out", out, tuple(names))  # exactly the files this command writes
+        plan.check()
+        staged = plan.stage(folder)
+        written = []
+        if bundled:
+            written += [out / copy_view_file(p, staged).name for p in bundled]
+            if manifest.is_file():  # scene pairs and ground-truth views (written by samples/generate.py)
+                import shutil
 
-        left, right = motorcycle_views()
-        targets = [out / "motorcycle_left.json", out / "motorcycle_right.json"]
-        params = {"baseline": C["baseline"], "focal_px": C["focal_px"], "doffs": C["doffs"]}
-        written.append(save_view(left, targets[0], depth_name="motorcycle_left_disp.pfm",
-                                 depth_encoding="disparity", depth_params=params))
-        written.append(save_view(right, targets[1]))
+                shutil.copyfile(manifest, staged / manifest.name)
+        else:
+            info("samples: no bundled synthetic views found in samples/data")
+        if not args.no_middlebury:
+            from ibr.io import save_view
+            from ibr.io.middlebury import MOTORCYCLE_CALIBRATION as C
+            from ibr.io.middlebury import motorcycle_views
+
+            left, right = motorcycle_views()
+            params = {"baseline": C["baseline"], "focal_px": C["focal_px"], "doffs": C["doffs"]}
+            save_view(left, staged / mb[0], color_name=mb[1], depth_name=mb[2], depth_encoding="disparity",
+                      depth_params=params)
+            save_view(right, staged / mb[3], color_name=mb[4])
+            written += [out / mb[0], out / mb[3]]
+        plan.commit()
     for path in written:
         info(f"wrote {path}")
     info(f"samples: {len(written)} view file(s) in {out}")

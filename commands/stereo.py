@@ -14,11 +14,14 @@ MODES = ("anaglyph", "dubois", "sbs", "sbs-half", "tb", "tb-half", "interleaved"
 
 
 def add_arguments(parser) -> None:
+    from commands._common import nonnegative_float, number_in, positive_float
+
     parser.add_argument("view", metavar="VIEW.json", help="view file with color, depth and camera")
-    parser.add_argument("--e", type=float, default=None, help="interaxial distance (scene units)")
-    parser.add_argument("--f", type=float, default=None, help="zero-parallax distance (scene units)")
+    parser.add_argument("--e", type=nonnegative_float, default=None, help="interaxial distance (scene units)")
+    parser.add_argument("--f", type=positive_float, default=None, help="zero-parallax distance (scene units)")
     parser.add_argument("--auto", action="store_true", help="choose e and f from the depth (default)")
-    parser.add_argument("--max-angle", type=float, default=1.6, metavar="DEG",
+    parser.add_argument("--max-angle", type=number_in(0, 90, lo_open=True, what="an angle"), default=1.6,
+                        metavar="DEG",
                         help="parallax visual-angle limit for --auto (default: %(default)s)")
     parser.add_argument("--source", choices=("center", "left", "right"), default="center",
                         help="the input view is between the eyes (both new) or one eye (default: %(default)s)")
@@ -26,7 +29,10 @@ def add_arguments(parser) -> None:
                         help="pixel: seed 003 method 2 (fast); mesh: quad-mesh renderer (method 1)")
     parser.add_argument("--mode", choices=MODES, default="anaglyph", help="output format (default: %(default)s)")
     parser.add_argument("--holes", action="store_true", help="also write the disocclusion masks (*_holes.png)")
-    parser.add_argument("-o", "--out", required=True, metavar="OUT", help="output image (.png, .jpg, .tif, .exr)")
+    parser.add_argument("-o", "--out", required=True, metavar="OUT", help="output image (.png, .jpg, .tif, .exr); --mode separate writes OUT_left/OUT_right")
+    from commands._sequence import add_stereo_arguments  # sequences: VIEW.json is a SEQ (#15)
+
+    add_stereo_arguments(parser)
 
 
 def display_image(arr, path):
@@ -50,50 +56,58 @@ def run(args) -> int:
 
     from commands._common import info
     from ibr.io import load_view, write_image
+    from ibr.io.outputs import OutputPlan
+    from ibr.stereo.pair import no_valid_depth_message, pack_stereo, stereo_pair
     from ibr.stereo.stereo_camera import auto_stereo, comfort, max_interaxial_for_range
-    from ibr.stereo.pair import pack_stereo, stereo_pair
+    from commands._sequence import is_sequence_argument, run_stereo  # sequences (#15)
 
-    out = Path(args.out)
-    if not out.parent.is_dir() and str(out.parent):
-        raise FileNotFoundError(f"--out: folder {out.parent} does not exist")
+    if is_sequence_argument(args.view):
+        return run_stereo(args)
     if args.auto and (args.e is not None or args.f is not None):
         raise ValueError("--auto: give either --auto or --e/--f, not both")
     if args.e is not None and args.f is None:
         raise ValueError("--e: needs --f as well (or use --auto, or --f alone)")
-    view = load_view(args.view)
-    depth = view.require_depth("ibr stereo")
-    valid = depth[np.isfinite(depth)]
-    if valid.size == 0:
-        raise ValueError(f"{args.view}: the depth has no valid pixel")
-    z_near, z_far = np.percentile(valid, [1, 99])
-    if args.f is None:
-        e, f = auto_stereo(depth, max_angle_deg=args.max_angle)
-        info(f"stereo: auto e = {e:.6g}, f = {f:.6g} (depth 1st-99th percentile {z_near:.4g}..{z_far:.4g})")
-    else:
-        f = args.f
-        e = args.e if args.e is not None else max_interaxial_for_range(z_near, z_far, f, max_angle_deg=args.max_angle)
-        info(f"stereo: e = {e:.6g}, f = {f:.6g}")
-    rep = comfort(z_near, z_far, e=e, f=f, max_angle_deg=args.max_angle)
-    info(f"stereo: parallax {rep.crossed_angle_deg:+.3f} .. {rep.uncrossed_angle_deg:+.3f} deg "
-         f"(limit {rep.angle_limit_deg} deg); nearest >= f/2: {rep.nearest_ok}"
-         + ("" if rep.ok else "  WARNING: outside the comfort limits"))
-    pair = stereo_pair(view, e=e, f=f, source=args.source, method=args.method)
-    info(f"stereo: disocclusions filled: left {pair.left_holes.mean():.2%}, right {pair.right_holes.mean():.2%}")
-    left, right = display_image(pair.left, out), display_image(pair.right, out)
-    packed = pack_stereo(left, right, args.mode)
-    written = []
-    if args.mode == "separate":
-        for tag, img in zip(("left", "right"), packed):
-            write_image(_suffixed(out, tag), img)
-            written.append(_suffixed(out, tag))
-    else:
-        write_image(out, packed)
-        written.append(out)
-    if args.holes:
-        for tag, m in (("left", pair.left_holes), ("right", pair.right_holes)):
-            p = _suffixed(out.with_suffix(".png"), f"{tag}_holes")
-            write_image(p, m.astype(np.uint8) * 255)
-            written.append(p)
+    exts = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr")
+    with OutputPlan("ibr stereo", log=info) as plan:
+        plan.add_view_input("VIEW", args.view)
+        out = Path(args.out)
+        if args.mode == "separate":
+            images = [plan.add_file(f"-o ({tag})", _suffixed(out, tag), exts) for tag in ("left", "right")]
+        else:
+            images = [plan.add_file("-o", out, exts)]
+        holes = []
+        if args.holes:
+            holes = [plan.add_file(f"--holes ({tag})", _suffixed(out.with_suffix(".png"), f"{tag}_holes"),
+                                   (".png",)) for tag in ("left", "right")]
+        plan.check()  # every output checked before any work (#12)
+
+        view = load_view(args.view)
+        depth = view.require_depth("ibr stereo")
+        valid = depth[np.isfinite(depth)]
+        if valid.size == 0:
+            raise ValueError(no_valid_depth_message(view))
+        z_near, z_far = np.percentile(valid, [1, 99])
+        if args.f is None:
+            e, f = auto_stereo(depth, max_angle_deg=args.max_angle)
+            info(f"stereo: auto e = {e:.6g}, f = {f:.6g} (depth 1st-99th percentile {z_near:.4g}..{z_far:.4g})")
+        else:
+            f = args.f
+            e = args.e if args.e is not None else max_interaxial_for_range(z_near, z_far, f,
+                                                                            max_angle_deg=args.max_angle)
+            info(f"stereo: e = {e:.6g}, f = {f:.6g}")
+        rep = comfort(z_near, z_far, e=e, f=f, max_angle_deg=args.max_angle)
+        info(f"stereo: parallax {rep.crossed_angle_deg:+.3f} .. {rep.uncrossed_angle_deg:+.3f} deg "
+             f"(limit {rep.angle_limit_deg} deg); nearest >= f/2: {rep.nearest_ok}"
+             + ("" if rep.ok else "  WARNING: outside the comfort limits"))
+        pair = stereo_pair(view, e=e, f=f, source=args.source, method=args.method)
+        info(f"stereo: disocclusions filled: left {pair.left_holes.mean():.2%}, right {pair.right_holes.mean():.2%}")
+        left, right = display_image(pair.left, out), display_image(pair.right, out)
+        packed = pack_stereo(left, right, args.mode)
+        for path, img in zip(images, packed if args.mode == "separate" else [packed]):
+            write_image(plan.stage(path), img)
+        for path, m in zip(holes, (pair.left_holes, pair.right_holes)):
+            write_image(plan.stage(path), m.astype(np.uint8) * 255)
+        written = plan.commit()
     for p in written:
         info(f"stereo: wrote {p}")
     return 0

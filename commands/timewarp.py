@@ -13,13 +13,16 @@ HELP = "time-warp a rendered frame to new head poses (rotation homography, depth
 
 
 def add_arguments(parser) -> None:
+    from commands._common import nonnegative_int
+
     parser.add_argument("view", metavar="VIEW.json", help="rendered frame (guard-band render) as a view file")
     parser.add_argument("--poses", required=True, metavar="POSES.json", help="new head poses")
-    parser.add_argument("--margin", type=int, default=0, metavar="PX",
+    parser.add_argument("--margin", type=nonnegative_int, default=0, metavar="PX",
                         help="guard band of the view on every side, cropped from the output (default: 0)")
     parser.add_argument("--mode", choices=("auto", "rotation", "depth"), default="auto",
                         help="auto: homography for pure rotations, depth warp when the head moved")
-    parser.add_argument("-o", "--out", required=True, metavar="DIR", help="output folder (frame_0000.png, ...)")
+    parser.add_argument("-o", "--out", required=True, metavar="DIR", help="output folder (frame_0000.png, ...; frames of an earlier run there are replaced, "
+                             "other files left alone)")
 
 
 def load_cameras(path, display):
@@ -42,41 +45,50 @@ def load_cameras(path, display):
         raise ValueError(f"--poses: expected a non-empty list of poses in {p}")
     cams = []
     for i, item in enumerate(items):
-        if isinstance(item, dict):
-            cams.append(Camera.from_dict(item))
-        else:
-            m = np.asarray(item, dtype=float)
-            if m.shape != (4, 4):
-                raise ValueError(f"--poses: pose {i} must be a 4x4 matrix or a camera object, got shape {m.shape}")
-            cams.append(display.with_pose(m))
+        try:
+            if isinstance(item, dict):
+                cams.append(Camera.from_dict(item))  # strict: unknown keys refused (#12)
+            else:
+                from ibr.base.validate import check_number
+
+                if not (isinstance(item, list) and len(item) == 4
+                        and all(isinstance(r, list) and len(r) == 4 for r in item)):
+                    raise ValueError(f"expected a 4x4 matrix or a camera object, got {str(item)[:80]}")
+                m = np.array([[check_number(f"[{r}][{c}]", v) for c, v in enumerate(row)]
+                              for r, row in enumerate(item)], dtype=float)
+                cams.append(display.with_pose(m))
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"--poses: {p}: pose {i}: {exc}") from None
     return cams
 
 
 def run(args) -> int:
     from dataclasses import replace
-    from pathlib import Path
 
     from commands._common import info, progress
     from commands.stereo import display_image
     from ibr.io import load_view, write_image
+    from ibr.io.outputs import OutputPlan
     from ibr.stereo.timewarp import timewarp
 
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out: {out} exists and is not a folder")
-    view = load_view(args.view)
-    m = args.margin
-    cam = view.camera
-    if m < 0 or 2 * m >= min(cam.width, cam.height):
-        raise ValueError(f"--margin: expected 0 <= margin < half the view size, got {m}")
-    display = replace(cam, cx=cam.cx - m, cy=cam.cy - m, width=cam.width - 2 * m, height=cam.height - 2 * m)
-    cams = load_cameras(args.poses, display)
-    out.mkdir(parents=True, exist_ok=True)
-    for i, c in progress(enumerate(cams), len(cams), "timewarp"):
-        fr = timewarp(view, c, mode=args.mode)
-        path = out / f"frame_{i:04d}.png"
-        write_image(path, display_image(fr.color, path))
-        if fr.outside.any():
-            info(f"timewarp: frame {i}: {fr.outside.mean():.1%} beyond the guard band (edge replicated)")
+    with OutputPlan("ibr timewarp", log=info) as plan:
+        plan.add_view_input("VIEW", args.view)
+        plan.add_input("--poses", args.poses)
+        out = plan.add_folder("-o", args.out, ("frame_[0-9][0-9][0-9][0-9]*.png",))
+        plan.check()  # every output checked before any work (#12)
+        view = load_view(args.view)
+        m = args.margin
+        cam = view.camera
+        if m < 0 or 2 * m >= min(cam.width, cam.height):
+            raise ValueError(f"--margin: expected 0 <= margin < half the view size, got {m}")
+        display = replace(cam, cx=cam.cx - m, cy=cam.cy - m, width=cam.width - 2 * m, height=cam.height - 2 * m)
+        cams = load_cameras(args.poses, display)
+        for i, c in progress(enumerate(cams), len(cams), "timewarp"):
+            fr = timewarp(view, c, mode=args.mode)
+            path = plan.stage(out, f"frame_{i:04d}.png")
+            write_image(path, display_image(fr.color, path))
+            if fr.outside.any():
+                info(f"timewarp: frame {i}: {fr.outside.mean():.1%} beyond the guard band (edge replicated)")
+        plan.commit()
     info(f"timewarp: wrote {len(cams)} frames to {out}")
     return 0

@@ -2,38 +2,46 @@
 
 from __future__ import annotations
 
+import shutil
 import tempfile
 import time
 from pathlib import Path
 
-from ._common import info, progress
+from ._common import info, progress, terminate_as_interrupt
 
 HELP = "render a perspective view of a panorama (equirect, cubemap or face folder), a tour, or serve a web viewer"
 
 
 def add_arguments(parser) -> None:
+    from ._common import finite_float, frame_count, frame_rate, image_side, number_in, port_number
+
     parser.add_argument("pano", help="equirect image (2:1), cubemap image (horizon, vstrip, dice) or "
                         "a folder of px/nx/py/ny/pz/nz face files")
     parser.add_argument("-o", "--output", default=None,
                         help="view image (.png/.jpg/.tif/.exr); with --tour a .gif/.mp4 (frames go "
                         "to <stem>_frames/) or a folder for frames only")
     parser.add_argument("--layout", default=None, help="layout of PANO (default: from its shape)")
-    parser.add_argument("--yaw", type=float, default=0.0,
+    parser.add_argument("--yaw", type=finite_float, default=0.0,
                         help="degrees, longitude of the view centre (0 = +z, 90 = +x, right)")
-    parser.add_argument("--pitch", type=float, default=0.0, help="degrees, +90 looks straight up")
-    parser.add_argument("--roll", type=float, default=0.0, help="degrees, camera turned clockwise")
-    parser.add_argument("--fov", type=float, default=90.0, help="horizontal field of view, degrees")
-    parser.add_argument("--width", type=int, default=1280)
-    parser.add_argument("--height", type=int, default=720)
-    parser.add_argument("--tour", type=int, default=None, metavar="N",
+    parser.add_argument("--pitch", type=finite_float, default=0.0, help="degrees, +90 looks straight up")
+    parser.add_argument("--roll", type=finite_float, default=0.0, help="degrees, camera turned clockwise")
+    parser.add_argument("--fov", type=number_in(0, 180, lo_open=True, hi_open=True, what="an angle"), default=90.0,
+                        help="horizontal field of view, degrees (0 < fov < 180)")
+    parser.add_argument("--width", type=image_side, default=1280)
+    parser.add_argument("--height", type=image_side, default=720)
+    parser.add_argument("--tour", type=frame_count, default=None, metavar="N",
                         help="write N frames turning once around (yaw from --yaw)")
-    parser.add_argument("--fps", type=float, default=12.0, help="tour frame rate (GIF/mp4)")
+    parser.add_argument("--fps", type=frame_rate, default=12.0, help="tour frame rate (GIF/mp4)")
     parser.add_argument("--serve", action="store_true",
-                        help="serve a WebGL viewer on http://127.0.0.1:PORT (Ctrl-C stops)")
-    parser.add_argument("--port", type=int, default=8000, help="port for --serve (0 = any free)")
+                        help="serve a WebGL viewer on http://127.0.0.1:PORT (Ctrl-C stops; a temporary "
+                        "site folder is removed on exit)")
+    parser.add_argument("--port", type=port_number, default=8000, help="port for --serve (1..65535, 0 = any free)")
     parser.add_argument("--site", default=None,
-                        help="folder for the viewer's page and faces (default: a temporary folder)")
-    parser.add_argument("--face-size", type=int, default=None, help="face size for --serve")
+                        help="folder for the viewer's page and faces (default: a temporary folder); "
+                        "must be new or empty unless --force")
+    parser.add_argument("--force", action="store_true",
+                        help="with --site: use a non-empty folder, replacing only the viewer's files there")
+    parser.add_argument("--face-size", type=image_side, default=None, help="face size for --serve")
 
 
 def _write_animation(path: Path, frames, fps: float) -> None:
@@ -60,51 +68,92 @@ def _write_animation(path: Path, frames, fps: float) -> None:
             writer.release()
 
 
-def run(args) -> int:
-    import panorama
-    from ibr.io import write_image
-    from panorama.files import read_panorama
-    from panorama.viewer import serve, site_url, to_uint8, tour_views, write_site
+def _serve(args, pano, layout) -> int:
+    from ibr.io.outputs import OutputPlan
+    from panorama.viewer import SITE_FILES, check_site_folder, serve, site_url, write_site
 
-    pano, layout = read_panorama(args.pano, layout=args.layout)
-    if args.serve:
-        folder = Path(args.site) if args.site else Path(tempfile.mkdtemp(prefix="ibr-view-"))
-        write_site(folder, pano, layout=layout, face_size=args.face_size)
-        server = serve(folder, port=args.port)
-        info(f"view: serving {folder} at "
-             f"{site_url(server, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov)}"
-             " (127.0.0.1 only; Ctrl-C stops)")
+    temporary = args.site is None
+    with terminate_as_interrupt():
+        if temporary:
+            folder = Path(tempfile.mkdtemp(prefix="ibr-view-"))
+        else:
+            folder = Path(args.site)
+        server = None
         try:
+            if temporary:
+                write_site(folder, pano, layout=layout, face_size=args.face_size)
+            else:
+                with OutputPlan("ibr view", log=info) as plan:
+                    plan.add_input("PANO", args.pano)
+                    site = plan.add_folder("--site", folder, SITE_FILES)
+                    plan.check()
+                    write_site(plan.stage(site), pano, layout=layout, face_size=args.face_size)
+                    plan.commit()
+            server = serve(folder, port=args.port)
+            info(f"view: serving {folder} at "
+                 f"{site_url(server, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov)}"
+                 " (127.0.0.1 only; Ctrl-C stops)")
             while True:
                 time.sleep(3600)
         except KeyboardInterrupt:
             info("view: stopped")
         finally:
-            server.shutdown()
-        return 0
+            if server is not None:
+                server.shutdown()
+                server.server_close()
+            if temporary:
+                shutil.rmtree(folder, ignore_errors=True)
+                info(f"view: removed the temporary site {folder}")
+    return 0
+
+
+def run(args) -> int:
+    import panorama
+    from ibr.io import write_image
+    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
+    from panorama.files import read_panorama
+    from panorama.viewer import check_site_folder, to_uint8, tour_views
+
+    if args.serve:
+        if args.site is not None:
+            check_site_folder(args.site, force=args.force)  # before reading anything (#12)
+        elif args.force:
+            raise ValueError("--force: only with --site")
+        pano, layout = read_panorama(args.pano, layout=args.layout)
+        return _serve(args, pano, layout)
+    if args.site is not None or args.force:
+        raise ValueError("--site/--force: only with --serve")
     if args.output is None:
         raise ValueError("-o/--output: required unless --serve is given")
     out = Path(args.output)
-    if args.tour is not None:
-        if args.tour < 1:
-            raise ValueError(f"--tour: expected a positive number of frames, got {args.tour}")
-        frames_dir = out if out.suffix == "" else out.with_name(out.stem + "_frames")
-        frames_dir.mkdir(parents=True, exist_ok=True)
-        frames = []
-        views = tour_views(pano, args.tour, pitch_deg=args.pitch, fov_deg=args.fov, width=args.width,
-                           height=args.height, layout=layout, start_yaw_deg=args.yaw)
-        for k, view in enumerate(progress(views, args.tour, "tour")):
-            frame = to_uint8(view)
-            write_image(frames_dir / f"frame_{k:04d}.png", frame)
-            frames.append(frame)
-        if out.suffix:
-            _write_animation(out, frames, args.fps)
-        info(f"view: {args.tour} frames in {frames_dir}" + (f", animation {out}" if out.suffix else ""))
-        return 0
-    view = panorama.perspective(pano, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll,
-                                fov_deg=args.fov, width=args.width, height=args.height, layout=layout)
-    if out.suffix.lower() in (".jpg", ".jpeg") or (out.suffix.lower() == ".png" and view.dtype.kind == "f"):
-        view = to_uint8(view)
-    write_image(out, view)
+    with OutputPlan("ibr view", log=info) as plan:
+        plan.add_input("PANO", args.pano)
+        if args.tour is not None:
+            frames_dir = out if out.suffix == "" else out.with_name(out.stem + "_frames")
+            frames = plan.add_folder("-o (tour frames)", frames_dir, ("frame_[0-9][0-9][0-9][0-9]*.png",))
+            anim = plan.add_file("-o", out, ANIMATION_EXTS) if out.suffix else None
+        else:
+            image = plan.add_file("-o", out, IMAGE_EXTS)
+        plan.check()  # every output checked before any work (#12)
+        pano, layout = read_panorama(args.pano, layout=args.layout)
+        if args.tour is not None:
+            kept = []
+            views = tour_views(pano, args.tour, pitch_deg=args.pitch, fov_deg=args.fov, width=args.width,
+                               height=args.height, layout=layout, start_yaw_deg=args.yaw)
+            for k, view in enumerate(progress(views, args.tour, "tour")):
+                frame = to_uint8(view)
+                write_image(plan.stage(frames, f"frame_{k:04d}.png"), frame)
+                kept.append(frame)
+            if anim:
+                _write_animation(plan.stage(anim), kept, args.fps)
+            plan.commit()
+            info(f"view: {args.tour} frames in {frames_dir}" + (f", animation {out}" if anim else ""))
+            return 0
+        view = panorama.perspective(pano, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll,
+                                    fov_deg=args.fov, width=args.width, height=args.height, layout=layout)
+        if out.suffix.lower() in (".jpg", ".jpeg") or (out.suffix.lower() == ".png" and view.dtype.kind == "f"):
+            view = to_uint8(view)
+        write_image(plan.stage(image), view)
+        plan.commit()
     info(f"view: yaw {args.yaw:g} pitch {args.pitch:g} roll {args.roll:g} fov {args.fov:g} -> {out}")
     return 0

@@ -11,23 +11,26 @@ def add_arguments(parser) -> None:
                         help="target camera: a view file (its camera; depth not needed) or a JSON camera "
                              "object {width, height, fx, fy, cx, cy, world_from_cam}")
     parser.add_argument("-o", "--output", required=True, metavar="OUT.png",
-                        help="output color image (.png, .exr, .tif, .jpg); written atomically")
+                        help="output color image (.png, .exr, .tif, .jpg); all outputs are checked before work "
+                             "and renamed into place together at the end")
     parser.add_argument("--method", choices=("mesh", "forward"), default="mesh",
                         help="quad-mesh inverse warp (default) or per-pixel forward splat")
     parser.add_argument("--fill", choices=("inpaint", "none"), default="inpaint",
                         help="depth-aware background fill of the holes (default) or none")
     parser.add_argument("--interpolation", choices=("linear", "cubic"), default="linear",
                         help="color reconstruction filter (default %(default)s)")
-    parser.add_argument("--depth-out", metavar="DEPTH.exr", help="also write the rendered planar depth")
-    parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (before filling)")
+    parser.add_argument("--depth-out", metavar="DEPTH.exr",
+                        help="also write the rendered planar depth (.exr, .tif, .pfm)")
+    parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (before filling; .png, .tif)")
 
 
 def load_camera(path):
-    """A Camera from a view file or from a bare camera JSON object (optionally under "camera")."""
+    """The target of ``--to``: a full View for a view file (so the result can be scored against
+    its colour), else a Camera from a bare camera JSON (strict schema, :func:`ibr.io.load_camera`)."""
     import json
     from pathlib import Path
 
-    from ibr.base.camera import Camera
+    from ibr.io import load_camera as _load_camera
     from ibr.io import load_view
 
     path = Path(path)
@@ -39,12 +42,7 @@ def load_camera(path):
         raise ValueError(f"--to: {path} is not valid JSON ({exc})") from None
     if isinstance(doc, dict) and doc.get("format") == "ibr-view":
         return load_view(path)
-    if isinstance(doc, dict) and isinstance(doc.get("camera"), dict):
-        doc = doc["camera"]
-    try:
-        return Camera.from_dict(doc)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"--to: {path}: {exc}") from None
+    return _load_camera(path, what="--to")
 
 
 def run(args) -> int:
@@ -55,41 +53,45 @@ def run(args) -> int:
 
     from commands._common import info
     from commands.interpolate import _metrics, _to_float, _to_png
-    from ibr.render.view_synthesis import source_mesh, warp
-    from ibr.io import atomic_path, load_view, write_depth, write_image
     from ibr.base.view import View
+    from ibr.io import load_view, write_depth, write_image
+    from ibr.io.outputs import IMAGE_EXTS, OutputPlan
+    from ibr.render.view_synthesis import source_mesh, warp
 
-    view = load_view(args.view)
-    target = load_camera(args.to)
-    out = Path(args.output)
-    if out.resolve() in {Path(args.view).resolve(), Path(args.to).resolve()}:
-        raise ValueError(f"-o: {out} would overwrite an input")
-    if args.method == "mesh" and view.depth is not None:
+    with OutputPlan("ibr warp", log=info) as plan:
+        plan.add_view_input("VIEW", args.view)
+        plan.add_view_input("--to", args.to)
+        out = plan.add_file("-o", args.output, IMAGE_EXTS)
+        depth_out = plan.add_file("--depth-out", args.depth_out, (".exr", ".tif", ".tiff", ".pfm"))
+        holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
+        plan.check()  # every output checked before any work (#12)
+
+        view = load_view(args.view)
+        target = load_camera(args.to)
+        if args.method == "mesh" and view.depth is not None:
+            t0 = time.perf_counter()
+            mesh = source_mesh(view)
+            info(f"mesh: {len(mesh)} quads in {(time.perf_counter() - t0) * 1e3:.1f} ms")
         t0 = time.perf_counter()
-        mesh = source_mesh(view)
-        info(f"mesh: {len(mesh)} quads in {(time.perf_counter() - t0) * 1e3:.1f} ms")
-    t0 = time.perf_counter()
-    result = warp(view, target, method=args.method, fill=args.fill, interpolation=args.interpolation)
-    dt = time.perf_counter() - t0
-    line = f"warp: {dt * 1e3:.1f} ms, holes {result.hole_fraction:.3%} (filled {result.filled.mean():.3%})"
-    if isinstance(target, View) and target.color.shape == result.color.shape:
-        cov = ~result.holes
-        a, b = _to_float(result.color)[cov], _to_float(target.color)[cov]
-        psnr = 10 * np.log10(1.0 / max(float(np.mean((a - b) ** 2)), 1e-20))
-        line += f", PSNR over covered pixels {psnr:.2f} dB vs {Path(args.to).name}"
-        if args.fill != "none":
-            line += f" (whole image: {_metrics(result.color, target.color)[0]:.2f} dB)"
-    color = _to_float(result.color) if out.suffix.lower() in (".exr", ".pfm") else result.color
-    if out.suffix.lower() in (".png", ".jpg", ".jpeg"):
-        color = _to_png(color)
-    with atomic_path(out) as tmp:
-        write_image(tmp, color)
-    if args.depth_out:
-        with atomic_path(Path(args.depth_out)) as tmp:
-            write_depth(tmp, result.depth)
-    if args.holes_out:
-        with atomic_path(Path(args.holes_out)) as tmp:
-            write_image(tmp, (result.holes * 255).astype(np.uint8))
+        result = warp(view, target, method=args.method, fill=args.fill, interpolation=args.interpolation)
+        dt = time.perf_counter() - t0
+        line = f"warp: {dt * 1e3:.1f} ms, holes {result.hole_fraction:.3%} (filled {result.filled.mean():.3%})"
+        if isinstance(target, View) and target.color.shape == result.color.shape:
+            cov = ~result.holes
+            a, b = _to_float(result.color)[cov], _to_float(target.color)[cov]
+            psnr = 10 * np.log10(1.0 / max(float(np.mean((a - b) ** 2)), 1e-20))
+            line += f", PSNR over covered pixels {psnr:.2f} dB vs {Path(args.to).name}"
+            if args.fill != "none":
+                line += f" (whole image: {_metrics(result.color, target.color)[0]:.2f} dB)"
+        color = _to_float(result.color) if out.suffix.lower() in (".exr", ".pfm") else result.color
+        if out.suffix.lower() in (".png", ".jpg", ".jpeg"):
+            color = _to_png(color)
+        write_image(plan.stage(out), color)
+        if depth_out:
+            write_depth(plan.stage(depth_out), result.depth)
+        if holes_out:
+            write_image(plan.stage(holes_out), (result.holes * 255).astype(np.uint8))
+        written = plan.commit()
     info(line)
-    info(f"wrote {out}")
+    info(f"wrote {', '.join(map(str, written))}")
     return 0

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ibr.base.validate import check_choice, check_finite_scalar, check_image
+from ibr.base.validate import check_choice, check_finite_scalar, check_image, check_image_size
 
 from . import maps as _maps
 from .depth import face_ray_lengths, planar_from_range, range_from_planar
@@ -60,6 +60,11 @@ def _depth_array(name: str, img: np.ndarray) -> np.ndarray:
         img = img[..., 0]
     if img.dtype.kind != "f":
         raise ValueError(f"{name}: depth must be float (range or planar z), got dtype {img.dtype}")
+    with np.errstate(invalid="ignore"):
+        negative = img < 0
+    if negative.any():  # (#12) would become negative planar z in the faces
+        raise ValueError(f"{name}: depth must be positive (NaN = no depth), got {int(negative.sum())} negative "
+                         f"value(s), min {float(np.min(img[negative])):.6g}")
     return img.astype(np.float32, copy=False)
 
 
@@ -95,6 +100,7 @@ def equirect_to_cubemap(image, face_size: int, *, layout: str = "dict", depth: b
     """
     img = check_equirect("image", image, depth=depth)
     s = _check_size("face_size", face_size)
+    check_image_size("face_size", s, 6 * s, channels=4)  # six faces, before allocating (#12)
     layout = canonical_layout(layout)
     interp = _interp(interpolation, depth)
     out_dtype = np.float32 if depth else img.dtype
@@ -129,6 +135,7 @@ def cubemap_to_equirect(cube, width: int, height: int, *, layout: str = "dict",
     if width != 2 * height:
         raise ValueError(f"width, height: an equirectangular image must be 2:1 (width = 2 x "
                          f"height), got {width} x {height}")
+    check_image_size("width, height", width, height, channels=4)  # before allocating (#12)
     interp = _interp(interpolation, depth)
     s = faces[0].shape[0]
     out_dtype = faces[0].dtype
@@ -193,6 +200,7 @@ def perspective(pano, *, yaw_deg: float, pitch_deg: float, roll_deg: float = 0.0
     """
     width = _check_size("width", width)
     height = _check_size("height", height)
+    check_image_size("width, height", width, height, channels=4)  # before allocating (#12)
     fov = check_finite_scalar("fov_deg", fov_deg)
     if not 0 < fov < 180:
         raise ValueError(f"fov_deg: expected 0 < fov_deg < 180, got {fov_deg!r}")

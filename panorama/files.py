@@ -18,10 +18,12 @@ from .convert import detect_layout
 from .directions import FACE_FILE_NAMES
 from .layouts import canonical_layout, pack_faces, unpack_faces
 
-__all__ = ["FILE_LAYOUTS", "find_face_files", "read_panorama", "write_cubemap"]
+__all__ = ["FACE_EXTS", "FILE_LAYOUTS", "find_face_files", "read_panorama", "write_cubemap"]
 
 FILE_LAYOUTS = ("horizon", "vstrip", "dice", "files")
-_EXTS = (".png", ".exr", ".tif", ".tiff", ".jpg", ".jpeg", ".pfm")
+#: Extensions of face files (read and written).
+FACE_EXTS = (".png", ".exr", ".tif", ".tiff", ".jpg", ".jpeg", ".pfm")
+_EXTS = FACE_EXTS
 
 
 def find_face_files(folder) -> list[Path]:

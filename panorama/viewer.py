@@ -4,7 +4,10 @@
 * :func:`write_site` writes the static page (``panorama/web/index.html``) next to six 8-bit face
   files ``px.png .. nz.png`` (canonical orientation, :mod:`panorama.directions`).
 * :func:`serve` serves such a folder on 127.0.0.1 only (``http.server``) from a background
-  thread; the caller stops it with ``server.shutdown()``.
+  thread; the caller stops it with ``server.shutdown()``. Only the page and the six faces are
+  served, never other files that happen to be in the folder.
+* :func:`check_site_folder` is the rule for a user-named site folder: new or empty, unless
+  ``force`` (then only the viewer's own files in it are replaced).
 
 The page renders every pixel's ray exactly like :func:`panorama.perspective` (pixel centres at
 integers, ``fov`` across the full width) and takes ``?yaw=&pitch=&roll=&fov=`` in the URL;
@@ -25,9 +28,30 @@ from .convert import equirect_to_cubemap, perspective
 from .files import write_cubemap
 from .layouts import unpack_faces
 
-__all__ = ["WEB_DIR", "serve", "site_url", "to_uint8", "tour_views", "write_site"]
+__all__ = ["SITE_FILES", "WEB_DIR", "check_site_folder", "serve", "site_url", "to_uint8", "tour_views",
+           "write_site"]
 
 WEB_DIR = Path(__file__).with_name("web")
+#: The files of a viewer site: what write_site writes and the only files serve() serves.
+SITE_FILES = ("index.html",) + tuple(f"{n}.png" for n in ("px", "nx", "py", "ny", "pz", "nz"))
+
+
+def check_site_folder(folder, *, force: bool = False) -> Path:
+    """Refuse a site folder that is an existing file, or a non-empty folder unless ``force``.
+
+    Raises ``NotADirectoryError`` or ``FileExistsError`` (whose message says to use ``--force`` /
+    ``force=True``); with ``force`` only :data:`SITE_FILES` in the folder are replaced.
+    """
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise NotADirectoryError(f"site: {folder} exists and is not a folder")
+    if folder.is_dir() and not force:
+        others = sorted(p.name for p in folder.iterdir())
+        if others:
+            raise FileExistsError(
+                f"site: {folder} is not empty ({len(others)} entries, e.g. {others[0]!r}); choose a new or empty "
+                "folder, or pass --force (force=True) to replace only its viewer files (index.html, px.png..nz.png)")
+    return folder
 
 
 def to_uint8(img: np.ndarray) -> np.ndarray:
@@ -51,13 +75,15 @@ def tour_views(pano, n: int, *, pitch_deg: float = 0.0, fov_deg: float = 90.0, w
                           fov_deg=fov_deg, width=width, height=height, layout=layout)
 
 
-def write_site(folder, pano, *, layout: str | None = None, face_size: int | None = None) -> Path:
+def write_site(folder, pano, *, layout: str | None = None, face_size: int | None = None,
+               force: bool = False) -> Path:
     """Write ``index.html`` and ``px.png .. nz.png`` into ``folder``; return the page's path.
 
     ``pano`` is an equirect image (converted to faces of ``face_size``, default width / pi rounded
-    up to a multiple of 8, capped at 2048) or a cubemap in ``layout``.
+    up to a multiple of 8, capped at 2048) or a cubemap in ``layout``. ``folder`` must be new or
+    empty unless ``force`` (:func:`check_site_folder`).
     """
-    folder = Path(folder)
+    folder = check_site_folder(folder, force=force)
     folder.mkdir(parents=True, exist_ok=True)
     if layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
                                 and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
@@ -74,22 +100,39 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     return page
 
 
-class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+class _SiteHandler(http.server.SimpleHTTPRequestHandler):
+    """Serves only the viewer's own files (:data:`SITE_FILES`); anything else is 404 (#12)."""
+
+    quiet = True
+
+    def send_head(self):
+        name = self.path.split("?", 1)[0].split("#", 1)[0].lstrip("/") or "index.html"
+        if name not in SITE_FILES:
+            self.send_error(404, "Not part of the viewer site")
+            return None
+        return super().send_head()
+
     def log_message(self, format, *args):  # noqa: A002 - http.server's signature
-        pass
+        if not self.quiet:
+            super().log_message(format, *args)
+
+
+class _LoudSiteHandler(_SiteHandler):
+    quiet = False
 
 
 def serve(folder, *, port: int = 0, quiet: bool = True) -> http.server.ThreadingHTTPServer:
     """Serve ``folder`` on http://127.0.0.1:<port>/ from a daemon thread (port 0 = any free one).
 
     Returns the running server; ``server.server_address[1]`` is the port, ``server.shutdown()``
-    stops it. Only the loopback interface is bound.
+    stops it. Only the loopback interface is bound, and only :data:`SITE_FILES` are served.
     """
     folder = Path(folder)
     if not (folder / "index.html").is_file():
         raise FileNotFoundError(f"folder: {folder} has no index.html (write it with write_site)")
-    handler = functools.partial(_QuietHandler if quiet else http.server.SimpleHTTPRequestHandler,
-                                directory=str(folder))
+    if isinstance(port, bool) or not isinstance(port, (int, np.integer)) or not 0 <= port <= 65535:
+        raise ValueError(f"port: expected 1..65535 (or 0 for any free port), got {port!r}")
+    handler = functools.partial(_SiteHandler if quiet else _LoudSiteHandler, directory=str(folder))
     server = http.server.ThreadingHTTPServer(("127.0.0.1", int(port)), handler)
     threading.Thread(target=server.serve_forever, daemon=True, name="panorama-viewer").start()
     return server

@@ -13,6 +13,7 @@ import os
 import numpy as np
 
 from ..mesh.quad_mesh import QuadMesh, segmentation_image
+from ..base.validate import check_image_size
 from .images import atomic_path
 
 __all__ = ["write_obj", "write_ply", "write_segmentation_png"]
@@ -129,9 +130,11 @@ def write_segmentation_png(mesh: QuadMesh, color, path, *, scale: int = 1) -> No
     (nearest neighbor) so that one-pixel quads stay visible."""
     import cv2
 
-    img = segmentation_image(mesh, color)
-    if isinstance(scale, bool) or int(scale) != scale or scale < 1:
+    if isinstance(scale, bool) or not isinstance(scale, (int, np.integer)) or scale < 1:
         raise ValueError(f"scale: expected an integer >= 1, got {scale!r}")
+    h, w = mesh.shape
+    check_image_size("scale", w * int(scale), h * int(scale), channels=3, itemsize=1)  # before allocating (#12)
+    img = segmentation_image(mesh, color)
     if scale > 1:
         img = np.repeat(np.repeat(img, scale, 0), scale, 1)
     if not str(path).lower().endswith(".png"):

@@ -107,6 +107,12 @@ def same_file(a, b) -> bool:
         return False
 
 
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def _pid_alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
@@ -157,7 +163,7 @@ class OutputPlan:
         self.log = log or (lambda message: None)
         self.inputs: list[tuple[str, Path]] = []
         self.outputs: list[_Output] = []
-        self._staging: dict[Path, Path] = {}      # destination folder (abs) -> its staging folder
+        self._staging: dict = {}        # destination folder (abs), or (folder, id) for a frame folder -> staging
         self._checked = False
         self._done = False
         self._old_sigterm = None
@@ -257,7 +263,7 @@ class OutputPlan:
             raise IsADirectoryError(f"{o.option}: {p} is a folder, expected a file name")
         folder = p.parent
         if not folder.is_dir():
-            raise FileNotFoundError(f"{o.option}: the folder {folder} of {p} does not exist")
+            raise FileNotFoundError(f"{o.option}: the output folder {folder} of {p} does not exist")
         self._check_input_clash(o, p)
 
     def _check_folder(self, o: _Output) -> None:
@@ -304,33 +310,32 @@ class OutputPlan:
                                  "give each output its own path")
             seen[key] = o
         for o in self.outputs:
-            if o.folder and o.create:
-                stage = self._staging_for(o, o.anchor)
-                o.staged = stage / _abs(o.path).relative_to(o.anchor)
-                o.staged.mkdir(parents=True)
-            elif o.folder:
-                o.staged = self._staging_for(o, _abs(o.path))
+            if o.folder:  # a frame folder gets a staging folder of its own
+                o.staged = self._staging_for(o, o.anchor if o.create else _abs(o.path), own=True)
             else:
                 o.staged = self._staging_for(o, _abs(o.path).parent) / o.path.name
         self._checked = True
         return self
 
-    def _staging_for(self, o: _Output, folder: Path) -> Path:
+    def _staging_for(self, o: _Output, folder: Path, *, own: bool = False) -> Path:
         folder = Path(os.path.realpath(folder))
-        if folder not in self._staging:
+        key = (folder, id(o)) if own else folder
+        if key not in self._staging:
             _remove_stale_staging(folder)
             try:
-                self._staging[folder] = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{os.getpid()}-",
-                                                              dir=folder))
+                self._staging[key] = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{os.getpid()}-",
+                                                           dir=folder))
             except OSError as exc:
                 raise PermissionError(f"{o.option}: cannot write into the folder {folder} of {o.path} "
                                       f"({exc.strerror or exc})") from None
-        return self._staging[folder]
+        return self._staging[key]
 
     # ----------------------------------------------------------------- writing
     def stage(self, output, name: str | None = None) -> Path:
         """The staged path to write output ``output`` to (a path returned by :meth:`add_file`), or
-        file ``name`` of frame folder ``output`` (``name`` must match the folder's patterns)."""
+        file ``name`` of frame folder ``output`` (``name`` must match the folder's patterns), or,
+        without ``name``, the staged frame folder itself (for writers that fill a folder; every
+        file they leave there must match the patterns)."""
         if not self._checked:
             raise RuntimeError("OutputPlan: call check() before staging outputs")
         o = self._find(output)
@@ -338,7 +343,9 @@ class OutputPlan:
             if name is not None:
                 raise ValueError(f"name: {o.option} is one file, not a folder")
             return o.staged
-        if name is None or Path(name).name != name:
+        if name is None:
+            return o.staged
+        if Path(name).name != name:
             raise ValueError(f"name: expected a plain file name inside {o.option}, got {name!r}")
         if not any(fnmatch.fnmatchcase(name, pat) for pat in o.patterns):
             raise ValueError(f"name: {name!r} does not follow the patterns {', '.join(o.patterns)} "
@@ -375,7 +382,13 @@ class OutputPlan:
                 if not o.staged.is_file():
                     raise OSError(f"{o.option}: {o.path}: nothing was written")
                 moves.append((o.staged, o.path, o.staged.parent))
-            elif o.create:
+                continue
+            o.names = sorted(e.name for e in os.scandir(o.staged))
+            odd = [n for n in o.names if not any(fnmatch.fnmatchcase(n, pat) for pat in o.patterns)]
+            if odd:
+                raise ValueError(f"{o.option}: files {', '.join(odd)} do not follow the patterns "
+                                 f"{', '.join(o.patterns)} of the frame folder")
+            if o.create:
                 new_folders.append(o)
             else:
                 moves += [(o.staged / n, o.path / n, o.staged) for n in o.names]
@@ -398,6 +411,7 @@ class OutputPlan:
                     for n in o.names:
                         os.replace(o.staged / n, o.path / n)
                 else:
+                    os.chmod(o.staged, 0o777 & ~_umask())  # mkdtemp made it private
                     os.rename(o.staged, o.path)
                 done.append(o.path)
         except BaseException:

@@ -202,14 +202,25 @@ def _lenses(lens) -> tuple[RadialDistortion, ...]:
                     f"for chromatic aberration), got {type(lens).__name__}")
 
 
+def _check_center(center_px, width: int, height: int) -> tuple[float, float]:
+    """The lens centre as floats, inside the image span [-0.5, W - 0.5] x [-0.5, H - 0.5] (#12:
+    a centre far outside gives an all-black picture)."""
+    c = check_array("center_px", center_px, shape=(2,), dtype_kind="fiu").astype(np.float64)
+    u, v = float(c[0]), float(c[1])
+    if not (np.isfinite(c).all() and -0.5 <= u <= width - 0.5 and -0.5 <= v <= height - 0.5):
+        raise ValueError(f"center_px: expected a lens centre inside the image, u in [-0.5, {width - 0.5:g}] and "
+                         f"v in [-0.5, {height - 0.5:g}] (pixel centres at integers), got ({u:g}, {v:g})")
+    return u, v
+
+
 def distortion_maps(width: int, height: int, lens: RadialDistortion, *, center_px=None,
                     scale_px: float | None = None, inverse: bool = False,
                     method: str = "newton") -> tuple[np.ndarray, np.ndarray]:
     """Cached, read-only sampling maps; see :func:`_distortion_maps` (same arguments)."""
     if not isinstance(lens, RadialDistortion):
         raise TypeError(f"lens: expected a RadialDistortion, got {type(lens).__name__}")
-    center = None if center_px is None else (float(center_px[0]), float(center_px[1]))
-    scale = None if scale_px is None else float(scale_px)
+    center = None if center_px is None else _check_center(center_px, int(width), int(height))
+    scale = None if scale_px is None else check_positive("scale_px", scale_px)
     return _cached_maps(int(width), int(height), lens, center, scale, bool(inverse), method)
 
 

@@ -78,6 +78,9 @@ def stereo_cameras(camera: Camera, *, e: float, f: float, source: str = "center"
     f = check_positive("f", f)
     check_choice("source", source, SOURCES)
     shift = camera.fx * e / f  # total principal-point difference in pixels
+    if not shift <= 10 * camera.width:  # (#12) a parallax of many image widths is a unit mix-up
+        raise ValueError(f"e: the zero-parallax shift fx*e/f = {shift:.6g} px exceeds 10 image widths "
+                         f"({camera.width} px); e={e:g} is too large for f={f:g} (units mixed up?)")
     offsets = {"center": (-e / 2, e / 2), "left": (0.0, e), "right": (-e, 0.0)}[source]
     dcx = {"center": (-shift / 2, shift / 2), "left": (0.0, shift), "right": (-shift, 0.0)}[source]
     cams = []
@@ -185,6 +188,11 @@ def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, me
     return layer.color, layer.depth, layer.coverage
 
 
+def no_valid_depth_message(view: View) -> str:
+    """The error for a view whose depth has no valid pixel (library and CLI say the same)."""
+    return f"view {view.name!r}: the depth has no valid pixel (all NaN); a stereo pair needs depth"
+
+
 def stereo_pair(view: View, *, e: float, f: float, source: str = "center", method: str = "pixel",
                 max_jump_px: float = 1.0, mesh_options: dict | None = None) -> StereoPair:
     """Synthesize a stereo pair from one RGB-D view (seed 003, step 3).
@@ -210,6 +218,8 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
     if not isinstance(view, View):
         raise TypeError(f"view: expected a View, got {type(view).__name__}")
     view.require_depth("a stereo pair")
+    if not np.isfinite(view.depth).any():  # same check and message as `ibr stereo` (#12)
+        raise ValueError(no_valid_depth_message(view))
     check_choice("method", method, METHODS)
     left_cam, right_cam = stereo_cameras(view.camera, e=e, f=f, source=source)
     mesh = None
