@@ -19,6 +19,7 @@ ALLOWED = {
     "ibr.stereo": {"ibr.base", "ibr.mesh", "ibr.render"},
     "ibr.synth": {"ibr.base"},
     "ibr.io": {"ibr.base", "ibr.mesh"},
+    "ibr.sequence": {"ibr.base", "ibr.mesh", "ibr.render", "ibr.stereo", "ibr.io"},
     "panorama": {"ibr.base", "ibr.mesh", "ibr.render", "ibr.synth", "ibr.io"},
 }
 

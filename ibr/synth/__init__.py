@@ -4,7 +4,8 @@ In: a scene name (or primitives) and cameras -- pinhole, or any rays (origins, d
 Out: :class:`~ibr.base.View` renders whose depth is exact at every pixel center, so warps can be
 scored against the truth. :mod:`~ibr.synth.scene` (ray caster, shading),
 :mod:`~ibr.synth.primitives`, :mod:`~ibr.synth.textures`, :mod:`~ibr.synth.scenes` (the named
-scenes and their camera pairs). Imports only :mod:`ibr.base`.
+scenes and their camera pairs), :mod:`~ibr.synth.paths` (camera paths: key frames and
+exact in-between frames of a sequence). Imports only :mod:`ibr.base`.
 """
 
 from __future__ import annotations
@@ -28,6 +29,11 @@ _EXPORTS = {
     "make_scene": "scenes",
     "scene_cameras": "scenes",
     "staircase": "scenes",
+    "SyntheticSequence": "paths",
+    "camera_path": "paths",
+    "path_frame_cameras": "paths",
+    "render_path": "paths",
+    "synthetic_sequence": "paths",
 }
 
 __getattr__, __dir__, __all__ = lazy_exports(__name__, _EXPORTS)

@@ -1,0 +1,454 @@
+"""Idempotent batch jobs: one ``ibr`` command line each, staged outputs, a record of checksums.
+
+A batch file lists jobs; a job is any ``ibr`` command line::
+
+    {"format": "ibr-batch", "version": 1,
+     "jobs": [{"id": "stereo_0001", "argv": ["stereo", "views/f_0001.json", "--mode", "sbs",
+                                              "-o", "out/f_0001.png"]},
+              {"command": "ibr interpolate views/f_0001.json views/f_0002.json --out out/mid_0001"},
+              ...]}
+
+(a bare list of jobs is accepted too). ``argv`` (or ``command``, split like a shell, a leading
+``ibr`` optional) is the command line; ``id`` (default: a hash of the command line) names the
+job's record; ``outputs`` lists the command-line values that are outputs (default: the values of
+``-o/--out/--output/--video/--contact-sheet/--obj/--ply/--viz/--depth-out/--holes-out``);
+``inputs`` adds input files the command line does not name; ``cwd`` (default: the batch file's
+folder) is where relative paths start. Jobs are independent: no job may read another's output.
+
+Running a job (:func:`run_job`, on any worker) is idempotent and leaves no partial file:
+
+1. its inputs are checksummed (SHA-256): every existing file named on the command line, plus the
+   colour/depth files of view files and the views of sequence manifests
+   (:func:`ibr.sequence.referenced_files`), plus ``inputs``;
+2. if the job's record exists with the same command line, the same input checksums and every
+   output file present with its recorded checksum, nothing runs (``skipped``);
+3. otherwise every output value on the command line is redirected into a hidden staging folder
+   ``.ibr-batch-<id>-<token>/`` beside the output, the command runs in a child process
+   (``python -c`` running ``cli.main``; the child exits when its parent dies), and only when it
+   succeeds are the staged files renamed into place (each rename atomic); the record, written
+   atomically after them, marks the job done. A worker killed at any point leaves at most a
+   staging folder, which the next attempt of the job removes before it starts.
+
+Records live in one folder (default ``.ibr-batch/`` beside the batch file): ``<id>.json`` with
+the command line, input and output checksums, the run and attempt that committed it, and
+``commits.log``, one line per commit (how the tests see that every job was committed once).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import re
+import shlex
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..io.images import atomic_path
+from .files import referenced_files
+
+__all__ = [
+    "BATCH_FORMAT",
+    "OUTPUT_OPTIONS",
+    "RECORD_FORMAT",
+    "STAGE_PREFIX",
+    "Job",
+    "file_sha256",
+    "load_jobs",
+    "run_job",
+]
+
+BATCH_FORMAT = "ibr-batch"
+RECORD_FORMAT = "ibr-batch-record"
+STAGE_PREFIX = ".ibr-batch-"
+
+#: Options whose value is an output path, for jobs that do not list their ``outputs``.
+OUTPUT_OPTIONS = ("-o", "--out", "--output", "--video", "--contact-sheet", "--obj", "--ply", "--viz",
+                  "--depth-out", "--holes-out")
+
+#: Thread-count variables set to ``threads_per_job`` in each job's process (the pool, not the job,
+#: uses the cores): numba, OpenMP/BLAS, OpenCV's parallel_for.
+THREAD_ENV = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+              "OPENCV_FOR_THREADS_NUM")
+
+# The job's process: exits when its parent (the worker) dies, then runs the ibr command line.
+_BOOTSTRAP = (
+    "import os, sys, threading, time\n"
+    "_parent = os.getppid()\n"
+    "def _watch():\n"
+    "    while True:\n"
+    "        time.sleep(0.2)\n"
+    "        if os.getppid() != _parent:\n"
+    "            os._exit(137)\n"
+    "threading.Thread(target=_watch, daemon=True).start()\n"
+    "import cli\n"
+    "sys.exit(cli.main(sys.argv[1:]))\n"
+)
+
+_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One ``ibr`` command line of a batch (module docstring).
+
+    Attributes
+    ----------
+    id : str
+        Record name: letters, digits, ``._-``.
+    argv : tuple of str
+        The command line without the leading ``ibr`` (e.g. ``("stereo", "a.json", "-o", "a.png")``).
+    cwd : str
+        Absolute folder where relative paths start.
+    outputs : tuple of str
+        Command-line values that are output paths (files or folders).
+    inputs : tuple of str
+        Extra input paths (relative to ``cwd``) beyond those named on the command line.
+    """
+
+    id: str
+    argv: tuple
+    cwd: str
+    outputs: tuple
+    inputs: tuple = ()
+
+    def to_dict(self) -> dict:
+        return {"id": self.id, "argv": list(self.argv), "cwd": self.cwd, "outputs": list(self.outputs),
+                "inputs": list(self.inputs)}
+
+
+def _option_value_pairs(argv):
+    """(index, option, value) for ``--opt value`` and ``--opt=value`` forms."""
+    for i, a in enumerate(argv):
+        if a.startswith("-") and "=" in a:
+            opt, _, val = a.partition("=")
+            yield i, opt, val
+        elif a.startswith("-") and i + 1 < len(argv):
+            yield i + 1, a, argv[i + 1]
+
+
+def _infer_outputs(argv) -> tuple:
+    return tuple(val for _, opt, val in _option_value_pairs(argv) if opt in OUTPUT_OPTIONS)
+
+
+def _job_from(entry, index: int, base: Path) -> Job:
+    where = f"jobs[{index}]"
+    if isinstance(entry, (str, list)):
+        entry = {"command": entry} if isinstance(entry, str) else {"argv": entry}
+    if not isinstance(entry, dict):
+        raise ValueError(f"{where}: expected an object with 'argv' or 'command', got {type(entry).__name__}")
+    unknown = set(entry) - {"id", "argv", "command", "outputs", "inputs", "cwd"}
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}")
+    if ("argv" in entry) == ("command" in entry):
+        raise ValueError(f"{where}: give exactly one of 'argv' (a list) and 'command' (a string)")
+    if "command" in entry:
+        if not isinstance(entry["command"], str):
+            raise ValueError(f"{where}: 'command' must be a string, got {entry['command']!r}")
+        argv = shlex.split(entry["command"])
+    else:
+        argv = entry["argv"]
+        if not isinstance(argv, list) or not all(isinstance(a, str) for a in argv):
+            raise ValueError(f"{where}: 'argv' must be a list of strings, got {argv!r}")
+    argv = list(argv)
+    if argv and argv[0] in ("ibr", "ibr.exe"):
+        argv = argv[1:]
+    if not argv or argv[0].startswith("-"):
+        raise ValueError(f"{where}: expected an ibr command line (e.g. 'stereo A.json -o A.png'), got {argv!r}")
+    if argv[0] == "batch":
+        raise ValueError(f"{where}: a batch job cannot run 'ibr batch'")
+    outputs = entry.get("outputs")
+    if outputs is None:
+        outputs = _infer_outputs(argv)
+    elif not isinstance(outputs, list) or not all(isinstance(o, str) and o for o in outputs):
+        raise ValueError(f"{where}: 'outputs' must be a list of paths, got {outputs!r}")
+    outputs = tuple(outputs)
+    if not outputs:
+        raise ValueError(f"{where}: no output found in {shlex.join(argv)!r}; name it with -o/--out or list the "
+                         "command-line values that are outputs in 'outputs'")
+    for o in outputs:
+        if o not in argv and not any(val == o for _, _, val in _option_value_pairs(argv)):
+            raise ValueError(f"{where}: output {o!r} does not appear on the command line {shlex.join(argv)!r}")
+    inputs = entry.get("inputs", [])
+    if not isinstance(inputs, list) or not all(isinstance(i, str) and i for i in inputs):
+        raise ValueError(f"{where}: 'inputs' must be a list of paths, got {inputs!r}")
+    cwd = entry.get("cwd", ".")
+    if not isinstance(cwd, str):
+        raise ValueError(f"{where}: 'cwd' must be a folder path, got {cwd!r}")
+    cwd = (base / cwd).resolve()
+    job_id = entry.get("id")
+    if job_id is None:
+        digest = hashlib.sha1(json.dumps([argv, str(cwd)]).encode()).hexdigest()[:12]
+        job_id = f"{argv[0]}-{digest}"
+    if not isinstance(job_id, str) or not _ID.match(job_id):
+        raise ValueError(f"{where}: 'id' must be 1-100 letters, digits, '.', '_' or '-' (not first), got {job_id!r}")
+    return Job(job_id, tuple(argv), str(cwd), outputs, tuple(inputs))
+
+
+def load_jobs(path) -> list[Job]:
+    """Read a batch file (module docstring) into jobs; relative paths start at its folder.
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    ValueError
+        Invalid JSON or schema; duplicate job ids; two jobs writing the same output.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"jobs: {path} does not exist (expected a batch file, JSON)")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise ValueError(f"jobs: {path} is not valid JSON ({exc})") from None
+    if isinstance(doc, dict):
+        if doc.get("format") not in (None, BATCH_FORMAT):
+            raise ValueError(f"jobs: {path}: 'format' must be {BATCH_FORMAT!r}, got {doc.get('format')!r}")
+        entries = doc.get("jobs")
+    else:
+        entries = doc
+    if not isinstance(entries, list) or not entries:
+        raise ValueError(f"jobs: {path}: expected a non-empty list of jobs (or an object with 'jobs'), got {entries!r}")
+    base = path.resolve().parent
+    jobs = [_job_from(e, i, base) for i, e in enumerate(entries)]
+    seen_ids, seen_out = {}, {}
+    for i, j in enumerate(jobs):
+        if j.id in seen_ids:
+            raise ValueError(f"jobs[{i}]: id {j.id!r} is also the id of jobs[{seen_ids[j.id]}]")
+        seen_ids[j.id] = i
+        for o in j.outputs:
+            key = os.path.normpath(os.path.join(j.cwd, o))
+            if key in seen_out:
+                raise ValueError(f"jobs[{i}]: output {o!r} is also an output of jobs[{seen_out[key]}]")
+            seen_out[key] = i
+    return jobs
+
+
+# --------------------------------------------------------------------------- checksums
+def file_sha256(path) -> str:
+    """SHA-256 hex digest of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _input_checksums(job: Job) -> dict[str, str]:
+    cwd = Path(job.cwd)
+    outs = set(job.outputs)
+    names = [v for v in job.argv[1:] if v not in outs and not v.startswith("-")]
+    names += [val for _, _, val in _option_value_pairs(job.argv) if val not in outs]
+    names += list(job.inputs)
+    files: set[Path] = set()
+    for n in names:
+        p = cwd / n
+        if p.exists():
+            files.update(referenced_files(p))
+    for n in job.inputs:
+        if not (cwd / n).exists():
+            raise FileNotFoundError(f"job {job.id}: input {n!r} does not exist in {cwd}")
+    return {os.path.relpath(p, cwd): file_sha256(p) for p in sorted(files)}
+
+
+# --------------------------------------------------------------------------- records
+def _record_path(records: Path, job: Job) -> Path:
+    return records / f"{job.id}.json"
+
+
+def _read_record(path: Path):
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+    return doc if isinstance(doc, dict) and doc.get("format") == RECORD_FORMAT else None
+
+
+def _up_to_date(record, job: Job, inputs: dict) -> bool:
+    if record is None or record.get("argv") != list(job.argv) or record.get("cwd") != job.cwd:
+        return False
+    if record.get("inputs") != inputs:
+        return False
+    outs = record.get("outputs")
+    if not isinstance(outs, dict) or not outs:
+        return False
+    cwd = Path(job.cwd)
+    for rel, digest in outs.items():
+        p = cwd / rel
+        if not p.is_file() or file_sha256(p) != digest:
+            return False
+    return True
+
+
+def _append_log(records: Path, line: dict) -> None:
+    data = (json.dumps(line, sort_keys=True) + "\n").encode()
+    fd = os.open(records / "commits.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    try:
+        os.write(fd, data)  # one small O_APPEND write: lines of concurrent commits never interleave
+    finally:
+        os.close(fd)
+
+
+# --------------------------------------------------------------------------- staging
+def _stage_argv(job: Job, token: str) -> tuple[list[str], list[Path], dict[Path, Path]]:
+    """The command line with every output redirected into a staging folder beside it.
+
+    Returns (argv, staging folders, {staged output path: final output path}).
+    """
+    cwd = Path(job.cwd)
+    stages: dict[Path, Path] = {}
+    mapping: dict[str, str] = {}
+    staged_to_final: dict[Path, Path] = {}
+    for o in job.outputs:
+        final = Path(os.path.normpath(cwd / o))
+        parent = final.parent
+        parent.mkdir(parents=True, exist_ok=True)
+        stage = stages.setdefault(parent, parent / f"{STAGE_PREFIX}{job.id}-{token}")
+        stage.mkdir(exist_ok=True)
+        mapping[o] = str(stage / final.name)
+        staged_to_final[stage / final.name] = final
+    argv = []
+    for a in job.argv:
+        if a.startswith("-") and "=" in a:
+            opt, _, val = a.partition("=")
+            argv.append(f"{opt}={mapping[val]}" if val in mapping else a)
+        else:
+            argv.append(mapping.get(a, a))
+    return argv, list(stages.values()), staged_to_final
+
+
+def _remove_stale_stages(job: Job) -> int:
+    """Remove staging folders of earlier, interrupted attempts of this job; return how many."""
+    cwd = Path(job.cwd)
+    n = 0
+    prefix = f"{STAGE_PREFIX}{job.id}-"
+    for parent in {Path(os.path.normpath(cwd / o)).parent for o in job.outputs}:
+        with contextlib.suppress(OSError):
+            for entry in os.scandir(parent):
+                if entry.name.startswith(prefix) and entry.is_dir(follow_symlinks=False):
+                    shutil.rmtree(entry.path, ignore_errors=True)
+                    n += 1
+    return n
+
+
+def _commit(stages: list[Path]) -> list[Path]:
+    """Rename every staged file into the stage's parent folder (same relative path); a staged
+    folder replacing an existing folder is swapped in whole. Returns the final files."""
+    finals: list[Path] = []
+    for stage in stages:
+        parent = stage.parent
+        for entry in sorted(stage.iterdir()):
+            final = parent / entry.name
+            if entry.is_dir():
+                if final.is_dir():  # swap: the old folder leaves, the new one arrives whole
+                    old = stage / f".old-{entry.name}"
+                    os.rename(final, old)
+                    os.rename(entry, final)
+                    shutil.rmtree(old, ignore_errors=True)
+                else:
+                    os.rename(entry, final)
+                finals += [p for p in sorted(final.rglob("*")) if p.is_file()]
+            else:
+                os.replace(entry, final)
+                finals.append(final)
+        shutil.rmtree(stage, ignore_errors=True)
+    return finals
+
+
+def _tail(text: str, lines: int = 6) -> str:
+    return "\n".join(text.strip().splitlines()[-lines:])
+
+
+def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, timeout: float | None = None) -> dict:
+    """Run one job idempotently (module docstring); never raises for a failing command.
+
+    Parameters
+    ----------
+    job : Job or dict
+        The job (a dict as :meth:`Job.to_dict` gives, for workers that receive plain data).
+    run_id : str
+        Identifier of the batch run; a record already committed by this run (an attempt whose
+        worker died after committing) counts as done, not as skipped.
+    records : str or Path
+        Records folder (shared by all workers).
+    threads_per_job : int
+        Threads each job's process may use (:data:`THREAD_ENV`).
+    timeout : float, optional
+        Seconds before the job's process is killed (the job then fails).
+
+    Returns
+    -------
+    dict
+        ``id``, ``status`` (``"done"``, ``"skipped"`` or ``"failed"``), ``seconds``, ``worker``
+        (host:pid), ``returncode``, ``error`` (last lines of the command's stderr or the
+        exception), ``outputs`` (files written), ``interrupted_attempts`` (staging folders of
+        earlier attempts removed), ``recovered`` (committed by an earlier attempt of this run).
+    """
+    if isinstance(job, dict):
+        job = Job(job["id"], tuple(job["argv"]), job["cwd"], tuple(job["outputs"]), tuple(job.get("inputs", ())))
+    records = Path(records)
+    start = time.perf_counter()
+    result = {"id": job.id, "argv": list(job.argv), "status": "failed", "seconds": 0.0,
+              "worker": f"{socket.gethostname()}:{os.getpid()}", "returncode": None, "error": "",
+              "outputs": [], "interrupted_attempts": 0, "recovered": False}
+    try:
+        records.mkdir(parents=True, exist_ok=True)
+        result["interrupted_attempts"] = _remove_stale_stages(job)
+        inputs = _input_checksums(job)
+        record = _read_record(_record_path(records, job))
+        if _up_to_date(record, job, inputs):
+            result["status"] = "done" if record.get("run") == run_id else "skipped"
+            result["recovered"] = record.get("run") == run_id
+            result["outputs"] = sorted(record["outputs"])
+            return result
+        token = uuid.uuid4().hex[:12]
+        argv, stages, _ = _stage_argv(job, token)
+        env = dict(os.environ)
+        for var in THREAD_ENV:
+            env[var] = str(threads_per_job)
+        try:
+            proc = subprocess.run([sys.executable, "-c", _BOOTSTRAP, *argv], cwd=job.cwd, env=env,
+                                  stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            for s in stages:
+                shutil.rmtree(s, ignore_errors=True)
+            result["error"] = f"timed out after {timeout} s"
+            return result
+        result["returncode"] = proc.returncode
+        if proc.returncode != 0:
+            for s in stages:
+                shutil.rmtree(s, ignore_errors=True)
+            result["error"] = _tail(proc.stderr) or f"exit code {proc.returncode}"
+            return result
+        staged = [p for s in stages for p in s.rglob("*") if p.is_file()]
+        if not staged:
+            for s in stages:
+                shutil.rmtree(s, ignore_errors=True)
+            result["error"] = f"the command succeeded but wrote none of its outputs {list(job.outputs)}"
+            return result
+        finals = _commit(stages)
+        cwd = Path(job.cwd)
+        outputs = {os.path.relpath(p, cwd): file_sha256(p) for p in finals}
+        doc = {"format": RECORD_FORMAT, "version": 1, "id": job.id, "argv": list(job.argv), "cwd": job.cwd,
+               "inputs": inputs, "outputs": outputs, "run": run_id, "attempt": token, "worker": result["worker"],
+               "seconds": round(time.perf_counter() - start, 4),
+               "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+        with atomic_path(_record_path(records, job)) as tmp:
+            tmp.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+        _append_log(records, {"id": job.id, "run": run_id, "attempt": token})
+        result["status"] = "done"
+        result["outputs"] = sorted(outputs)
+        return result
+    except Exception as exc:  # noqa: BLE001 - a job's failure is reported, never raised
+        result["error"] = f"{type(exc).__name__}: {exc}"
+        return result
+    finally:
+        result["seconds"] = round(time.perf_counter() - start, 4)
