@@ -19,8 +19,9 @@ ALLOWED = {
     "ibr.stereo": {"ibr.base", "ibr.mesh", "ibr.render"},
     "ibr.synth": {"ibr.base"},
     "ibr.io": {"ibr.base", "ibr.mesh"},
+    "ibr.canvas": {"ibr.base", "ibr.mesh", "ibr.render"},
     "ibr.sequence": {"ibr.base", "ibr.mesh", "ibr.render", "ibr.stereo", "ibr.io"},
-    "panorama": {"ibr.base", "ibr.mesh", "ibr.render", "ibr.synth", "ibr.io"},
+    "panorama": {"ibr.base", "ibr.mesh", "ibr.render", "ibr.synth", "ibr.io", "ibr.canvas"},
 }
 
 # Public names -> the module that defines them. The README and docs show these.

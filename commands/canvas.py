@@ -1,0 +1,283 @@
+"""``ibr canvas``: put an image, a video or strokes on a plane in an RGB-D view or a panorama."""
+
+from __future__ import annotations
+
+HELP = "place an image, a video or drawn strokes on a plane in a view file or a panorama (virtual canvas)"
+
+_VIEW_EXTS = (".json",)
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("scene", metavar="SCENE",
+                        help="a view file (.json; its depth hides what is behind) or a panorama (equirect 2:1, "
+                             "cubemap image, or a folder of px/nx/py/ny/pz/nz faces)")
+    what = parser.add_mutually_exclusive_group(required=True)
+    what.add_argument("--image", metavar="FILE", help="image to show on the canvas (any size; resampled once)")
+    what.add_argument("--video", metavar="FILE", help="video to play on the canvas (OpenCV decodes it frame by frame)")
+    what.add_argument("--strokes", metavar="FILE",
+                      help='strokes JSON: {"strokes": [{"points": [[x, y], ...], "width": 4, "color": "#ff0000"}], '
+                           '"space": "canvas" (canvas pixels, default) or "screen" (pixels of SCENE), '
+                           '"background": "#ffffff00"}')
+    parser.add_argument("--center", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"),
+                        help="canvas centre in scene units (world frame: x right, y down, z forward)")
+    parser.add_argument("--normal", type=float, nargs=3, required=True, metavar=("NX", "NY", "NZ"),
+                        help="normal of the visible side (points toward the viewer)")
+    parser.add_argument("--up", type=float, nargs=3, default=(0.0, -1.0, 0.0), metavar=("UX", "UY", "UZ"),
+                        help="up direction on the canvas (default 0 -1 0: world up is -y)")
+    parser.add_argument("--size", type=float, nargs=2, required=True, metavar=("W", "H"),
+                        help="canvas width and height in scene units")
+    parser.add_argument("--resolution", type=int, nargs=2, default=None, metavar=("PW", "PH"),
+                        help="canvas buffer in pixels (default: the image's or video's size; 512 on the long "
+                             "side for strokes)")
+    parser.add_argument("--power-of-two", action="store_true",
+                        help="resample the content into a square power-of-two texture (seed 004)")
+    parser.add_argument("--depth", metavar="RANGE.exr",
+                        help="panoramas: equirect range map (distance along the ray) that hides the canvas")
+    parser.add_argument("--frames", type=int, default=None, metavar="N", help="--video: at most N frames")
+    parser.add_argument("--fps", type=float, default=None, help="--video with a video output: frame rate "
+                        "(default: the input's)")
+    parser.add_argument("--no-antialias", action="store_true", help="hard canvas edges")
+    parser.add_argument("-o", "--output", required=True, metavar="OUT",
+                        help="image (.png/.jpg/.tif/.exr; a folder for a face-folder panorama); with --video a "
+                             "folder of frame_0000.png ... or a video file (.mp4/.avi/.mov/.m4v)")
+
+
+def _positive(name: str, value) -> None:
+    if value is not None and not value > 0:
+        raise ValueError(f"{name}: expected a positive number, got {value}")
+
+
+def _strokes_doc(path):
+    import json
+    from pathlib import Path
+
+    from ibr.base.validate import check_keys
+
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"--strokes: file not found: {p}")
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"--strokes: {p} is not valid JSON ({exc})") from None
+    check_keys(f"--strokes {p.name}", doc, ("strokes", "space", "background"), required=("strokes",))
+    if doc.get("space", "canvas") not in ("canvas", "screen"):
+        raise ValueError(f"--strokes: space: expected 'canvas' or 'screen', got {doc['space']!r}")
+    if not isinstance(doc["strokes"], list):
+        raise ValueError("--strokes: strokes: expected a list")
+    for i, s in enumerate(doc["strokes"]):
+        check_keys(f"--strokes: strokes[{i}]", s, ("points", "width", "color"), required=("points",))
+    return doc
+
+
+def _to_output_dtype(img, path):
+    import numpy as np
+
+    if path.suffix.lower() in (".png", ".jpg", ".jpeg") and img.dtype.kind == "f":
+        return np.clip(np.rint(np.nan_to_num(img) * 255.0), 0, 255).astype(np.uint8)
+    if path.suffix.lower() in (".exr", ".pfm") and img.dtype.kind == "u":
+        return (img.astype(np.float32) / (255.0 if img.dtype == np.uint8 else 65535.0))
+    return img
+
+
+class _Target:
+    """Where the canvas goes: a view (pinhole camera + depth) or a panorama (layout + range)."""
+
+    def __init__(self, args):
+        from pathlib import Path
+
+        self.path = Path(args.scene)
+        self.is_view = self.path.suffix.lower() in _VIEW_EXTS
+        if self.is_view:
+            from ibr.io import load_view
+
+            if args.depth:
+                raise ValueError("--depth: only for panoramas; a view file brings its own depth")
+            self.view = load_view(self.path)
+        else:
+            from ibr.io import read_image
+            from panorama.files import read_panorama
+
+            self.pano, self.layout = read_panorama(self.path)
+            self.rng = None
+            if args.depth:
+                if self.layout != "equirect":
+                    raise ValueError("--depth: a range map is for equirect panoramas")
+                self.rng = read_image(args.depth, what="--depth")
+                if self.rng.ndim != 2 or self.rng.shape != self.pano.shape[:2] or self.rng.dtype.kind != "f":
+                    raise ValueError(f"--depth: expected a float range map of {self.pano.shape[1]}x"
+                                     f"{self.pano.shape[0]}, got {self.rng.dtype} {self.rng.shape}")
+        self.antialias = not args.no_antialias
+
+    def render(self, canvases):
+        import ibr.canvas as C
+
+        if self.is_view:
+            return C.composite(self.view, canvases, antialias=self.antialias).color
+        from panorama.canvas import composite_panorama
+
+        kw = {"rng": self.rng} if self.layout == "equirect" and self.rng is not None else {}
+        return composite_panorama(self.pano, canvases, layout=self.layout, antialias=self.antialias, **kw)
+
+    def screen_to_canvas(self, points, canvas):
+        """Canvas polylines of a stroke given in SCENE pixels."""
+        import numpy as np
+
+        import ibr.canvas as C
+
+        if self.is_view:
+            return C.stroke_from_screen(self.view.camera, points, canvas, depth=self.view.depth)
+        if self.layout != "equirect":
+            raise ValueError("--strokes: screen-space strokes need a view file or an equirect panorama")
+        from panorama.directions import direction_from_equirect_pixel
+
+        h, w = self.pano.shape[:2]
+        q = np.asarray(points, dtype=np.float64)
+        d = direction_from_equirect_pixel(q[:, 0], q[:, 1], w, h)
+        scene = None
+        if self.rng is not None:
+            iu = np.floor(q[:, 0] + 0.5).astype(int) % w
+            iv = np.clip(np.floor(q[:, 1] + 0.5).astype(int), 0, h - 1)
+            scene = self.rng[iv, iu]
+        index, xy, _ = C.pick_rays([canvas], np.zeros(3), d, scene_distance=scene)
+        parts, cur = [], []
+        for i, p in zip(index, xy):
+            if i == 0:
+                cur.append(p)
+            elif cur:
+                parts.append(np.array(cur))
+                cur = []
+        return parts + ([np.array(cur)] if cur else [])
+
+
+def _write(path, img, plan, name=None):
+    from ibr.io import write_image
+
+    write_image(plan.stage(path, name) if name else plan.stage(path), _to_output_dtype(img, path))
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    import ibr.canvas as C
+    from commands._common import info
+    from ibr.io import read_image
+    from ibr.io.outputs import IMAGE_EXTS, VIDEO_EXTS, OutputPlan
+
+    _positive("--fps", args.fps)
+    if args.frames is not None and args.frames < 1:
+        raise ValueError(f"--frames: expected a positive number of frames, got {args.frames}")
+    if args.video is None and (args.frames is not None or args.fps is not None):
+        raise ValueError("--frames, --fps: only with --video")
+    geo = dict(center=args.center, normal=args.normal, size=args.size, up=args.up)
+    out = Path(args.output)
+    face_folder = Path(args.scene).is_dir()
+    with OutputPlan("ibr canvas", log=info) as plan:
+        if Path(args.scene).suffix.lower() in _VIEW_EXTS:
+            plan.add_view_input("SCENE", args.scene)
+        else:
+            plan.add_input("SCENE", args.scene)
+        for opt, p in (("--image", args.image), ("--video", args.video), ("--strokes", args.strokes),
+                       ("--depth", args.depth)):
+            plan.add_input(opt, p)
+        video_file = args.video is not None and out.suffix.lower() in VIDEO_EXTS
+        if args.video is not None and not video_file:
+            plan.add_folder("-o", out, patterns=("frame_*.png",))
+        elif video_file:
+            plan.add_file("-o", out, VIDEO_EXTS)
+        elif face_folder:
+            plan.add_folder("-o", out, patterns=("px.*", "nx.*", "py.*", "ny.*", "pz.*", "nz.*"))
+        else:
+            plan.add_file("-o", out, IMAGE_EXTS)
+        plan.check()  # every output checked before any work
+
+        target = _Target(args)
+        if args.image is not None:
+            img = read_image(args.image, what="--image")
+            canvas = C.canvas_from_image(img, resolution=args.resolution, power_of_two=args.power_of_two,
+                                         name=Path(args.image).name, **geo)
+            _write_still(plan, out, target.render([canvas]), face_folder)
+            info(f"canvas: {canvas!r} -> {out}")
+        elif args.strokes is not None:
+            doc = _strokes_doc(args.strokes)
+            canvas = C.Canvas(resolution=args.resolution, name="strokes", **geo)
+            if "background" in doc:
+                canvas.clear(C.parse_color(doc["background"]))
+            painted = 0
+            for i, s in enumerate(doc["strokes"]):
+                pts = np.asarray(s["points"], dtype=np.float64)
+                if pts.ndim != 2 or pts.shape[1:] != (2,) or len(pts) < 1:
+                    raise ValueError(f"--strokes: strokes[{i}]: points: expected a list of [x, y] pairs")
+                parts = target.screen_to_canvas(pts, canvas) if doc.get("space") == "screen" else [pts]
+                for part in parts:
+                    painted += C.draw_stroke(canvas, part, width=s.get("width", 4.0), color=s.get("color", "#ff3030"))
+            if painted == 0:
+                info("canvas: no stroke touches the canvas (nothing drawn)")
+            _write_still(plan, out, target.render([canvas]), face_folder)
+            info(f"canvas: {len(doc['strokes'])} stroke(s), {painted} canvas pixels painted -> {out}")
+        else:
+            n = _run_video(args, plan, out, target, geo, video_file)
+            info(f"canvas: {n} video frame(s) -> {out}")
+        plan.commit()
+    return 0
+
+
+def _write_still(plan, out, img, face_folder):
+    if face_folder:
+        from panorama.directions import FACE_FILE_NAMES
+        from panorama.layouts import unpack_faces
+
+        for name, face in zip(FACE_FILE_NAMES, unpack_faces(img, "list")):
+            _write(out, face, plan, f"{name}.png")
+    else:
+        _write(out, img, plan)
+
+
+def _run_video(args, plan, out, target, geo, video_file) -> int:
+    import cv2
+    import numpy as np
+
+    import ibr.canvas as C
+    from commands._common import progress
+
+    src = C.VideoSource(args.video)
+    try:
+        res = args.resolution or (src.size if not args.power_of_two else (C.power_of_two_size(*src.size),) * 2)
+        canvas = C.Canvas(resolution=res, name="video", **geo)
+        total = src.frame_count if src.frame_count > 0 else (args.frames or 0)
+        if args.frames is not None:
+            total = min(total, args.frames) if total > 0 else args.frames
+        writer = None
+        n = 0
+
+        def frames():
+            while args.frames is None or n < args.frames:
+                if not src.read_into(canvas):
+                    return
+                yield n
+
+        for _ in progress(frames(), max(total, 1), "canvas"):
+            img = target.render([canvas])
+            if video_file:
+                if img.ndim != 3 or img.shape[2] != 3:
+                    raise ValueError("-o: a video file needs an RGB scene")
+                frame = _to_output_dtype(img, out.with_suffix(".png"))
+                if writer is None:
+                    fourcc = cv2.VideoWriter_fourcc(*("MJPG" if out.suffix.lower() == ".avi" else "mp4v"))
+                    fps = args.fps or src.fps or 25.0
+                    writer = cv2.VideoWriter(str(plan.stage(out)), fourcc, fps, (frame.shape[1], frame.shape[0]))
+                    if not writer.isOpened():
+                        raise OSError(f"-o: OpenCV cannot write a video to {out}")
+                writer.write(np.ascontiguousarray(frame[..., ::-1]))
+            else:
+                _write(out, img, plan, f"frame_{n:04d}.png")
+            n += 1
+        if writer is not None:
+            writer.release()
+        if n == 0:
+            raise ValueError(f"--video: no frame decoded from {args.video}")
+        return n
+    finally:
+        src.close()

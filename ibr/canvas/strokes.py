@@ -1,0 +1,147 @@
+"""Drawing on a canvas: anti-aliased strokes of a given width and colour (seed 004's whiteboard).
+
+Seed 004 (section 2.2, fig. 6) draws what the mouse sweeps over a plane: every screen point is
+picked onto the plane, mapped to the canvas and painted. Here a stroke is a polyline in canvas
+pixels (centres at integers). Its shape is the union of round-capped segments of width ``w``
+(a "capsule" per segment); each canvas pixel gets the coverage ``clamp(w/2 + 1/2 - dist)`` with
+``dist`` the distance from its centre to the polyline (a one-pixel linear ramp across the edge),
+and the colour is blended "over" the buffer once per stroke, so overlapping segments of one
+stroke do not darken. Points outside the canvas are fine: the stroke is clipped to the buffer,
+and a stroke entirely outside changes nothing (:func:`draw_stroke` returns 0 pixels).
+
+:func:`stroke_from_screen` turns screen points of a pinhole camera into canvas polylines by
+picking (:mod:`ibr.canvas.pick`); panoramas do the same through :mod:`panorama.canvas`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..base.camera import Camera
+from ..base.validate import check_array, check_finite_scalar
+from .pick import pick_pixels
+from .plane import Canvas
+
+__all__ = ["draw_stroke", "parse_color", "stroke_from_screen"]
+
+
+def parse_color(color) -> np.ndarray:
+    """RGBA in [0, 1] (float64, shape (4,)) from RGB/RGBA numbers in [0, 1] or ``'#rrggbb[aa]'``."""
+    if isinstance(color, str):
+        s = color.strip().lstrip("#")
+        if len(s) not in (6, 8) or any(ch not in "0123456789abcdefABCDEF" for ch in s):
+            raise ValueError(f"color: expected '#rrggbb' or '#rrggbbaa', got {color!r}")
+        vals = [int(s[i:i + 2], 16) / 255.0 for i in range(0, len(s), 2)]
+        return np.array(vals + [1.0] * (4 - len(vals)))
+    c = check_array("color", color, ndim=1, dtype_kind="fiu").astype(np.float64)
+    if c.shape not in ((3,), (4,)):
+        raise ValueError(f"color: expected 3 or 4 numbers (RGB[A] in [0, 1]), got shape {c.shape}")
+    if not np.all(np.isfinite(c) & (c >= 0) & (c <= 1)):
+        raise ValueError(f"color: expected values in [0, 1], got {c.tolist()}")
+    return np.append(c, 1.0) if len(c) == 3 else c
+
+
+def _segment_distance(px, py, a, b):
+    """Distance from points (px, py) to the segment a-b."""
+    d = b - a
+    l2 = float(d @ d)
+    if l2 == 0.0:
+        return np.hypot(px - a[0], py - a[1])
+    s = np.clip(((px - a[0]) * d[0] + (py - a[1]) * d[1]) / l2, 0.0, 1.0)
+    return np.hypot(px - (a[0] + s * d[0]), py - (a[1] + s * d[1]))
+
+
+def draw_stroke(canvas: Canvas, points, *, width: float = 3.0, color=(1.0, 0.0, 0.0, 1.0)) -> int:
+    """Paint an anti-aliased polyline onto ``canvas.rgba`` (in place).
+
+    Parameters
+    ----------
+    canvas : Canvas
+    points : (N, 2) array
+        Canvas pixel coordinates (column, row; centres at integers), N >= 1 (one point is a dot).
+        Points may lie outside the buffer.
+    width : float
+        Stroke width in canvas pixels (> 0).
+    color : RGB or RGBA in [0, 1], or '#rrggbb[aa]'
+        Stroke colour; its alpha scales the coverage.
+
+    Returns
+    -------
+    int
+        Number of canvas pixels changed (0: the stroke lies entirely outside the canvas).
+    """
+    if not isinstance(canvas, Canvas):
+        raise TypeError(f"canvas: expected a Canvas, got {type(canvas).__name__}")
+    pts = check_array("points", points, ndim=2, dtype_kind="fiu").astype(np.float64)
+    if pts.shape[1] != 2 or len(pts) < 1:
+        raise ValueError(f"points: expected shape (N, 2) with N >= 1, got {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise ValueError("points: expected finite coordinates")
+    w = check_finite_scalar("width", width)
+    if w <= 0:
+        raise ValueError(f"width: expected a positive stroke width in canvas pixels, got {width!r}")
+    rgba = parse_color(color)
+    r = w / 2.0 + 0.5  # coverage reaches 0 at distance w/2 + 1/2
+    cw, ch = canvas.resolution
+    u0 = max(int(np.floor(pts[:, 0].min() - r)), 0)
+    u1 = min(int(np.ceil(pts[:, 0].max() + r)) + 1, cw)
+    v0 = max(int(np.floor(pts[:, 1].min() - r)), 0)
+    v1 = min(int(np.ceil(pts[:, 1].max() + r)) + 1, ch)
+    if u0 >= u1 or v0 >= v1:
+        return 0
+    cov = np.zeros((v1 - v0, u1 - u0))
+    segs = [(pts[i], pts[i + 1]) for i in range(len(pts) - 1)] or [(pts[0], pts[0])]
+    for a, b in segs:  # coverage of the union = max of the segments' coverages
+        su0 = max(int(np.floor(min(a[0], b[0]) - r)), u0)
+        su1 = min(int(np.ceil(max(a[0], b[0]) + r)) + 1, u1)
+        sv0 = max(int(np.floor(min(a[1], b[1]) - r)), v0)
+        sv1 = min(int(np.ceil(max(a[1], b[1]) + r)) + 1, v1)
+        if su0 >= su1 or sv0 >= sv1:
+            continue
+        py, px = np.mgrid[sv0:sv1, su0:su1].astype(np.float64)
+        c = np.clip(w / 2.0 + 0.5 - _segment_distance(px, py, a, b), 0.0, 1.0)
+        sub = cov[sv0 - v0:sv1 - v0, su0 - u0:su1 - u0]
+        np.maximum(sub, c, out=sub)
+    a_s = cov * rgba[3]
+    changed = a_s > 0
+    n = int(changed.sum())
+    if n == 0:
+        return 0
+    # "over" with straight alpha: A = a_s + a_d (1 - a_s), C = (c_s a_s + c_d a_d (1 - a_s)) / A
+    m = canvas.max_value
+    dst = canvas.rgba[v0:v1, u0:u1].astype(np.float64) / m
+    a_d = dst[..., 3]
+    a_out = a_s + a_d * (1.0 - a_s)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        col = (rgba[:3] * a_s[..., None] + dst[..., :3] * (a_d * (1.0 - a_s))[..., None]) / a_out[..., None]
+    col = np.where(a_out[..., None] > 0, col, 0.0)
+    new = np.concatenate([col, a_out[..., None]], axis=-1)
+    region = canvas.rgba[v0:v1, u0:u1]
+    region[changed] = canvas.from_unit(new[changed])
+    return n
+
+
+def stroke_from_screen(camera: Camera, uv, canvas: Canvas, *, depth=None, others=(), depth_tol: float = 1e-3):
+    """Canvas polylines of a stroke drawn at screen pixels ``uv`` (N, 2) of a pinhole camera.
+
+    Every point is picked (nearest visible canvas among ``canvas`` and ``others``, against the
+    scene ``depth``); points that land on ``canvas`` are kept in order, and the stroke is split
+    where it leaves ``canvas`` (off the canvas, hidden by the scene or by another canvas).
+
+    Returns
+    -------
+    list of (M, 2) float64 arrays
+        Canvas pixel polylines; empty when no point lands on ``canvas`` (drawing them is a no-op).
+    """
+    items = [canvas] + list(others)
+    index, xy, _ = pick_pixels(camera, uv, items, depth=depth, depth_tol=depth_tol)
+    parts, cur = [], []
+    for i, q in zip(index, xy):
+        if i == 0:
+            cur.append(q)
+        elif cur:
+            parts.append(np.array(cur))
+            cur = []
+    if cur:
+        parts.append(np.array(cur))
+    return parts
