@@ -89,7 +89,11 @@ def _serve(args, pano, layout) -> int:
                     plan.check()
                     write_site(plan.stage(site), pano, layout=layout, face_size=args.face_size)
                     plan.commit()
-            server = serve(folder, port=args.port)
+            from panorama.canvas import serve_canvas_site, store_path, write_canvas_site  # canvases (#14)
+
+            write_canvas_site(folder)
+            server = serve_canvas_site(folder, store_path(args.pano), port=args.port)
+            info(f"view: click-to-place canvases are stored in {store_path(args.pano)}")
             info(f"view: serving {folder} at "
                  f"{site_url(server, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov)}"
                  " (127.0.0.1 only; Ctrl-C stops)")

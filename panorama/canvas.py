@@ -54,6 +54,7 @@ from ibr.canvas.plane import MAX_TEXELS
 from .directions import (WORLD_FROM_FACE, direction_from_equirect_pixel, equirect_pixel_from_direction,
                          world_from_view)
 from .layouts import LAYOUTS, canonical_layout, layout_faces, unpack_faces
+from .viewer import _SiteHandler
 
 __all__ = [
     "STORE_VERSION",
@@ -386,8 +387,9 @@ def write_canvas_site(folder) -> Path:
     return dst
 
 
-class _CanvasHandler(http.server.SimpleHTTPRequestHandler):
-    """Static files of the site, plus the canvas store:
+class _CanvasHandler(_SiteHandler):
+    """The viewer site's files (:data:`panorama.viewer.SITE_FILES` and ``canvas.js``, nothing
+    else of the folder), plus the canvas store:
 
     * ``GET /canvas-store.json`` -- the store (``{"version": 1, "canvases": []}`` when empty);
     * ``GET /canvas-files/<path>`` -- an image the store names (relative to its folder), nothing else;
@@ -398,8 +400,11 @@ class _CanvasHandler(http.server.SimpleHTTPRequestHandler):
     store: Path = Path("canvas.json")
     lock = threading.Lock()
 
-    def log_message(self, format, *args):  # noqa: A002 - http.server's signature
-        pass
+    def send_head(self):
+        name = self.path.split("?", 1)[0].split("#", 1)[0].lstrip("/")
+        if name == "canvas.js":
+            return http.server.SimpleHTTPRequestHandler.send_head(self)
+        return super().send_head()
 
     def _reply(self, code: int, body: bytes, ctype: str = "application/json") -> None:
         self.send_response(code)
