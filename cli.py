@@ -22,6 +22,7 @@ COMMANDS = [
     ("timewarp", "timewarp"),
     ("cubemap", "cubemap"),
     ("view", "view"),
+    ("stitch", "stitch"),
     ("canvas", "canvas"),
     ("batch", "batch"),
 ]

@@ -21,7 +21,7 @@ ALLOWED = {
     "ibr.io": {"ibr.base", "ibr.mesh"},
     "ibr.canvas": {"ibr.base", "ibr.mesh", "ibr.render"},
     "ibr.sequence": {"ibr.base", "ibr.mesh", "ibr.render", "ibr.stereo", "ibr.io"},
-    "panorama": {"ibr.base", "ibr.mesh", "ibr.render", "ibr.synth", "ibr.io", "ibr.canvas"},
+    "panorama": {"ibr.base", "ibr.mesh", "ibr.render", "ibr.stereo", "ibr.synth", "ibr.io", "ibr.canvas"},
 }
 
 # Public names -> the module that defines them. The README and docs show these.

@@ -7,7 +7,8 @@ the weighted sum, a farther one is hidden. Colour is sampled bilinearly at the s
 (pixel centres at integers, taps clamped to the image) only where a source covers the pixel.
 
 Weight of a sample (all factors in [0, 1]):
-``w = incidence**2 * exp(-(angle / sigma)**2) * min(1, border_px / feather)``, ``angle`` the angle
+``w = incidence**2 * exp(-(angle / sigma)**2) * min(1, border_px / feather)`` with angle^2 taken as
+``2 (1 - cos angle)``, ``angle`` the angle
 at the surface point between the target ray and the ray from the source camera's centre,
 ``incidence`` the cosine between the source ray and the surface normal, ``border_px`` the
 distance of the sample from the source image's border (feathering hides where a source ends).
@@ -67,25 +68,29 @@ def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, f
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _weight(px, py, pz, dx, dy, dz, cxs, cys, czs, incid, us, vs, src_w, src_h, inv_sigma2, inv_feather):
-    # angle between the target ray d and the source ray (P - C) at the surface point P
+    # angle between the target ray d and the source ray (P - C) at the surface point P, through
+    # angle^2 ~= 2 (1 - cos angle) (exact to 0.1 % below 10 degrees; monotonic everywhere)
     sx, sy, sz = px - cxs, py - cys, pz - czs
-    ns = math.sqrt(sx * sx + sy * sy + sz * sz)
-    cosang = (sx * dx + sy * dy + sz * dz) / max(ns, 1e-300)
-    ang = math.acos(min(1.0, max(-1.0, cosang)))
+    ns2 = sx * sx + sy * sy + sz * sz
+    cosang = (sx * dx + sy * dy + sz * dz) / math.sqrt(max(ns2, 1e-300))
+    ang2 = 2.0 * (1.0 - cosang)
     border = min(min(us + 0.5, src_w - 0.5 - us), min(vs + 0.5, src_h - 0.5 - vs))
     feather = min(1.0, max(0.0, border * inv_feather))
-    return max(incid * incid * math.exp(-ang * ang * inv_sigma2) * feather, _W_FLOOR)
+    return max(incid * incid * math.exp(-ang2 * inv_sigma2) * feather, _W_FLOOR)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def accumulate_spherical(src, map_u, map_v, rng, incid, rows, cols, center, src_id, rel_tol, inv_sigma2,
-                         inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
-    """Add one source rendered into a spherical camera (rig-frame tables, see _ray_kernels)."""
+def accumulate_spherical(src, map_u, map_v, rng, incid, rows, cols, center, v0, v1, colmask, src_id, rel_tol,
+                         inv_sigma2, inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
+    """Add one source rendered into a spherical camera (rig-frame tables, see _ray_kernels);
+    only rows v0..v1 and the columns set in colmask are read (the raster's region)."""
     h, w = rng.shape
     src_h, src_w = src.shape[0], src.shape[1]
-    for v in prange(h):
+    for v in prange(max(v0, 0), min(v1 + 1, h)):
         slat, clat, sr = rows[v, 0], rows[v, 1], rows[v, 2]
         for u in range(w):
+            if not colmask[u]:
+                continue
             z = rng[v, u]
             if not (z == z):
                 continue

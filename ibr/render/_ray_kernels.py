@@ -181,8 +181,30 @@ setup_rays = njit(cache=True, error_model="numpy", parallel=True)(_setup_rays)
 setup_rays_serial = njit(cache=True, error_model="numpy")(_setup_rays)
 
 
+@njit(cache=True, error_model="numpy")
+def region(bbox, width, height):
+    """Rows [v0, v1] and a column mask (W,) uint8 holding every quad's bounds (columns wrap).
+
+    Pixels outside the region are covered by no quad: the raster and blend kernels skip them.
+    v0 > v1 when no quad is visible.
+    """
+    v0, v1 = height, -1
+    cols = np.zeros(width, np.uint8)
+    for q in range(bbox.shape[0]):
+        if bbox[q, 0] > bbox[q, 2] or bbox[q, 1] > bbox[q, 3]:
+            continue
+        v0 = min(v0, bbox[q, 1])
+        v1 = max(v1, bbox[q, 3])
+        if bbox[q, 2] - bbox[q, 0] + 1 >= width:
+            cols[:] = 1
+        else:
+            for uw in range(bbox[q, 0], bbox[q, 2] + 1):
+                cols[uw % width] = 1
+    return v0, v1, cols
+
+
 def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band_start, band_quads,
-                 far_coord, rng, map_u, map_v, coverage, incid):
+                 far_coord, v0, v1, colmask, rng, map_u, map_v, coverage, incid):
     """Z-buffered ray casting of quads into a spherical camera, one band of rows per task.
 
     rng (H, W) float32 receives the range along each pixel's unit ray from its own origin (NaN
@@ -198,9 +220,10 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
     for band in prange(nbands):
         r0 = band * rows_per_band
         r1 = min(height, r0 + rows_per_band)
-        for v in range(r0, r1):
+        for v in range(max(r0, v0), min(r1, v1 + 1)):
             for u in range(width):
-                rng[v, u] = np.inf
+                if colmask[u]:
+                    rng[v, u] = np.inf
         for k in range(band_start[band], band_start[band + 1]):
             q = band_quads[k]
             nx, ny, nz, off = plane_rig[q, 0], plane_rig[q, 1], plane_rig[q, 2], plane_rig[q, 3]
@@ -248,8 +271,10 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
                     incid[v, u] = inv_nn / math.sqrt(xs * xs + ys * ys + zs * zs)  # n_cam . X_s = 1
                     map_u[v, u] = us
                     map_v[v, u] = vs
-        for v in range(r0, r1):
+        for v in range(max(r0, v0), min(r1, v1 + 1)):
             for u in range(width):
+                if not colmask[u]:
+                    continue
                 if rng[v, u] < np.inf:
                     coverage[v, u] = True
                 else:

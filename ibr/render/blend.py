@@ -115,10 +115,11 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
         if isinstance(camera, SphericalCamera):
             from .ray_raster import _tables
 
-            rasterize_mesh_rays(mesh, camera, footprint=footprint, out=maps, incidence=incid)
+            region = [0, -1, None]
+            rasterize_mesh_rays(mesh, camera, footprint=footprint, out=maps, incidence=incid, _region=region)
             center = (camera.world_from_rig[:3, :3].T @ (mesh.camera.position - camera.world_from_rig[:3, 3]))
             _k.accumulate_spherical(col, maps.map_u, maps.map_v, maps.depth, incid, _tables(camera, "rows"),
-                                    _tables(camera, "cols"), np.ascontiguousarray(center), i, *args)
+                                    _tables(camera, "cols"), np.ascontiguousarray(center), *region, i, *args)
         else:
             m = rasterize_mesh(mesh, camera, footprint=footprint)
             incid.fill(1.0)  # no per-pixel plane normal on the pinhole path

@@ -50,7 +50,8 @@ def src_from_rig(source, camera: SphericalCamera) -> tuple[np.ndarray, np.ndarra
 
 
 def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free", depth_tol: float = 0.01,
-                        out: SourceMaps | None = None, incidence: np.ndarray | None = None) -> SourceMaps:
+                        out: SourceMaps | None = None, incidence: np.ndarray | None = None,
+                        _region: list | None = None) -> SourceMaps:
     """Z-buffered ray casting of ``mesh`` into a spherical camera: source coordinates and range.
 
     Parameters
@@ -66,6 +67,9 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
     incidence : (H, W) float32 array, optional
         Receives, at covered pixels, the cosine between the source camera's ray and the quad's
         plane normal (1 = seen head-on); untouched elsewhere.
+    _region : list, optional
+        Internal (blending): when given, only the region the quads can reach is written and
+        ``_region`` receives ``[v0, v1, column_mask]``; the rest of ``out`` is stale.
 
     Returns
     -------
@@ -91,8 +95,14 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
     if incidence is None:
         incidence = np.empty((h, w), np.float32)
     start, order = bucket_bands(bbox, h, _nbands(h))
+    if _region is None:
+        v0, v1, colmask = 0, h - 1, np.ones(w, np.uint8)
+    else:
+        v0, v1, colmask = _k.region(bbox, w, h)
+        _region[:] = [v0, v1, colmask]
     _k.raster_rays(mesh.rects, plane_rig, bbox, flags, src_k, rot, tr, _tables(camera, "rows"),
-                   _tables(camera, "cols"), start, order, _FAR, out.depth, out.map_u, out.map_v, out.coverage, incidence)
+                   _tables(camera, "cols"), start, order, _FAR, v0, v1, colmask, out.depth, out.map_u, out.map_v,
+                   out.coverage, incidence)
     return out
 
 

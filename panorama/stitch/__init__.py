@@ -4,10 +4,14 @@ In: posed RGB-D :class:`ibr.View` objects (a camera rig, an engine's six cube fa
 through a room) or one RGB-D panorama. Out: equirect or cubemap colour + depth with hole masks,
 and ODS eye pairs packed for VR players. Built on the quad-mesh renderer: exact ray casting into
 spherical cameras (:mod:`ibr.render.ray_raster`) and N-source blending (:mod:`ibr.render.blend`).
+:mod:`~panorama.stitch.baselines` holds the depth-free strip stitching and the mesh slit
+stitching that ODS is measured against.
 """
 
+from .ods import ODS_LAYOUTS, OdsPair, ods_from_panorama, ods_from_views, pack_ods, panorama_views
 from .rgbd import Stitched, stitch_rgbd, stitch_rgbd_cubemap
 from .rigs import cube_rig, equirect_camera, ods_cameras, ring_rig
 
-__all__ = ["Stitched", "cube_rig", "equirect_camera", "ods_cameras", "ring_rig", "stitch_rgbd",
+__all__ = ["ODS_LAYOUTS", "OdsPair", "Stitched", "cube_rig", "equirect_camera", "ods_cameras",
+           "ods_from_panorama", "ods_from_views", "pack_ods", "panorama_views", "ring_rig", "stitch_rgbd",
            "stitch_rgbd_cubemap"]

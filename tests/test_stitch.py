@@ -1,0 +1,309 @@
+"""Stitched panoramas and ODS against the ray-traced truth of the synthetic "capture" scene."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import cli
+from ibr.base.camera import Camera
+from ibr.base.view import View
+from ibr.io import load_view, read_depth, read_image
+from ibr.synth import make_scene, render
+from panorama.convert import cubemap_to_equirect
+from panorama.stitch import (
+    OdsPair,
+    cube_rig,
+    equirect_camera,
+    ods_cameras,
+    ods_from_panorama,
+    ods_from_views,
+    pack_ods,
+    ring_rig,
+    stitch_rgbd,
+    stitch_rgbd_cubemap,
+)
+from panorama.stitch.baselines import slit_boundaries, slit_stitch, strip_stitch
+from panorama.stitch.ods import vertical_disparity
+from panorama.synth import render_spherical
+from samples import DATA_DIR
+
+W = 256  # equirect width of the accuracy tests
+
+
+def psnr(a, b, mask) -> float:
+    d = (np.asarray(a, np.float64) - np.asarray(b, np.float64))[mask]
+    return float(10 * np.log10(1.0 / np.mean(d * d)))
+
+
+def mse(a, b, mask) -> float:
+    d = (np.asarray(a, np.float64) - np.asarray(b, np.float64))[mask]
+    return float(np.mean(d * d))
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return make_scene("capture")
+
+
+@pytest.fixture(scope="module")
+def cube_views(scene):
+    return [render(scene, c, supersample=2) for c in cube_rig(96)]
+
+
+@pytest.fixture(scope="module")
+def ring_views(scene):
+    return [render(scene, c, supersample=2) for c in ring_rig(8, radius=0.1, width=128, height=128, hfov_deg=110.0)]
+
+
+@pytest.fixture(scope="module")
+def truths(scene):
+    cams = (equirect_camera(W),) + ods_cameras(W)
+    return {c.eye: render_spherical(scene, c, supersample=2) for c in cams}
+
+
+@pytest.fixture(scope="module")
+def ceiling(truths):
+    """What one resampling costs at this size: the truth against itself shifted by half a pixel
+    (32.6 dB for this scene at 256 x 128). A stitch resamples each source once."""
+    import cv2
+
+    t = truths["mono"][0]
+    mu, mv = np.meshgrid(np.arange(W, dtype=np.float32) + 0.5, np.arange(W // 2, dtype=np.float32))
+    shifted = cv2.remap(t, mu, mv, cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP)
+    return psnr(shifted, t, np.ones(t.shape[:2], bool))
+
+
+def test_mono_stitch_from_cube_faces_and_a_ring(cube_views, ring_views, truths, ceiling):
+    color, rng = truths["mono"]
+    assert 31.0 < ceiling < 34.0
+    for views in (cube_views, ring_views):
+        r = stitch_rgbd(views, equirect_camera(W))
+        seen = ~r.holes
+        assert psnr(r.color, color, seen) > ceiling - 1.0
+        assert r.color.dtype == views[0].color.dtype and r.depth.dtype == np.float32
+        # depth is the range along the ray from each pixel's own origin
+        ok = seen & np.isfinite(rng)
+        # within the mesh level of detail (planes fitted to 0.5 px of disparity; 0.2 % measured)
+        assert np.median(np.abs(r.depth[ok] - rng[ok]) / rng[ok]) < 5e-3
+    assert (~stitch_rgbd(cube_views, equirect_camera(W)).holes).all()  # six faces see everything
+
+
+def test_ods_eyes_from_views(cube_views, ring_views, truths, ceiling):
+    for views in (cube_views, ring_views):
+        pair = ods_from_views(views, W)
+        for eye in pair.eyes:
+            seen = ~eye.holes
+            assert psnr(eye.color, truths[eye.camera.eye][0], seen) > ceiling - 1.5
+    # the eyes differ where there is parallax (near objects), and agree at the poles (fade)
+    left, right = pair.left.color, pair.right.color
+    assert np.abs(left - right).max() > 0.2
+    lat = np.degrees(pair.left.camera.lat(np.arange(W // 2)))
+    pole_rows = np.abs(lat) >= 80
+    both = ~pair.left.holes[pole_rows] & ~pair.right.holes[pole_rows]
+    assert np.array_equal(left[pole_rows][both], right[pole_rows][both])
+
+
+def test_no_vertical_disparity_between_the_eyes():
+    left, right = ods_cameras(512)
+    rng = np.random.default_rng(1)
+    pts = rng.uniform(-10, 10, (2000, 3))
+    dv = vertical_disparity((left, right), pts)
+    seen = np.isfinite(dv)
+    assert seen.mean() > 0.99 and np.abs(dv[seen]).max() < 1e-9
+    # at the horizon the eyes differ only in columns
+    ul, vl, _ = left.project(np.array([[3.0, 0.0, 1.0]]))
+    ur, vr, _ = right.project(np.array([[3.0, 0.0, 1.0]]))
+    assert vl[0] == pytest.approx(127.5) and vr[0] == pytest.approx(127.5) and ur[0] < ul[0]
+
+
+def test_seams_between_sources_do_not_show(ring_views, truths):
+    """Error within 4 px of a change of winning source <= 2x the interior error."""
+    import cv2
+
+    r = stitch_rgbd(ring_views, equirect_camera(W))
+    w = r.winner.astype(np.int32)
+    edge = np.zeros(w.shape, np.uint8)
+    edge[:, 1:] |= w[:, 1:] != w[:, :-1]
+    edge[1:] |= w[1:] != w[:-1]
+    band = cv2.dilate(edge, np.ones((9, 9), np.uint8)).astype(bool) & ~r.holes
+    interior = ~band & ~r.holes
+    assert band.sum() > 500
+    assert mse(r.color, truths["mono"][0], band) <= 2.0 * mse(r.color, truths["mono"][0], interior)
+
+
+def test_cube_faces_then_convert_agree_with_the_direct_equirect(ring_views, ceiling):
+    """Ring views rendered per cube face (pinhole path) and converted with panorama agree with the
+    direct per-pixel equirect render, to within one extra resampling (the ceiling)."""
+    faces, zfaces, holes = stitch_rgbd_cubemap(ring_views, 128)
+    via_faces = cubemap_to_equirect(faces, W, W // 2)
+    direct = stitch_rgbd(ring_views, equirect_camera(W))
+    hole_eq = cubemap_to_equirect({k: v.astype(np.float32) for k, v in holes.items()}, W, W // 2) > 0
+    both = ~direct.holes & ~hole_eq
+    assert both.mean() > 0.5
+    assert psnr(via_faces, direct.color, both) > ceiling
+    rng_faces = cubemap_to_equirect(zfaces, W, W // 2, depth=True)
+    ok = np.isfinite(rng_faces) & both
+    assert np.median(np.abs(rng_faces[ok] / direct.depth[ok] - 1)) < 5e-3
+
+
+def test_ods_from_one_centre_panorama(truths, ceiling):
+    color, rng = truths["mono"]
+    pair = ods_from_panorama(color, rng)
+    for eye in pair.eyes:
+        t = truths[eye.camera.eye][0]
+        share = eye.holes.mean()
+        assert 0.0005 < share < 0.02  # disocclusions exist behind the near objects, and are few
+        assert psnr(eye.color, t, ~eye.holes) > ceiling - 1.5
+        assert np.isfinite(eye.depth).all() and not np.isnan(eye.color).any()  # filled from the background
+
+
+def test_strip_stitching_without_depth_is_much_worse(ring_views, truths):
+    for cam in ods_cameras(W):
+        ours = stitch_rgbd(ring_views, cam)
+        strip = strip_stitch(ring_views, cam)
+        m = ~ours.holes & ~strip.holes
+        # +3 dB at this small size (4.3-4.5 dB measured); +10 dB at 1024 wide (benchmarks/bench_stitch.py)
+        assert psnr(ours.color, truths[cam.eye][0], m) > psnr(strip.color, truths[cam.eye][0], m) + 3.0
+
+
+def test_mesh_slits_are_no_better_than_ours_and_stop_at_the_fade(ring_views, truths):
+    """Slits cover |lat| <= 60 deg only; over what they cover, ours is at least as accurate.
+    (How their error and seams shrink with N shows at full size: benchmarks/bench_stitch.py.)"""
+    cam = ods_cameras(W)[0]
+    t = truths["left"][0]
+    ours = stitch_rgbd(ring_views, cam)
+    lat = np.abs(cam.lat(np.arange(W // 2)))[:, None] * np.ones((1, W))
+    for n in (8, 16):
+        sl = slit_stitch(ring_views, cam, n)
+        m = ~sl.holes & ~ours.holes
+        assert m.mean() > 0.5
+        assert (lat[~sl.holes] <= math.radians(60.0) + 1e-9).all()
+        assert psnr(ours.color, t, m) >= psnr(sl.color, t, m) - 0.1
+        assert set(np.unique(sl.winner[~sl.holes])) == set(range(n))  # every slit used once
+    assert len(slit_boundaries(8, W)) == 8 and slit_boundaries(8, W)[1] == pytest.approx(W / 8 - 0.5)
+
+
+def test_views_with_different_sizes_and_intrinsics(scene, truths, ceiling):
+    cams = ring_rig(4, radius=0.05, width=160, height=120, hfov_deg=120.0)
+    cams += [Camera(70.0, 90.0, 40.0, 55.0, 96, 100, c.world_from_cam)
+             for c in ring_rig(4, radius=0.05, width=96, height=100, hfov_deg=100.0, pitches_deg=(0.0,))]
+    views = [render(scene, c, supersample=2) for c in cams]
+    r = stitch_rgbd(views, equirect_camera(W))
+    assert psnr(r.color, truths["mono"][0], ~r.holes) > ceiling - 1.5
+    assert set(np.unique(r.winner[~r.holes])) >= {0, 4}  # both kinds of camera contribute
+
+
+def test_a_source_that_sees_nothing_changes_nothing(cube_views):
+    plane = make_scene("plane")
+    pose = np.eye(4)
+    pose[:3, 3] = (0.0, 0.0, -8.0)  # rig is behind the plane the extra view sees
+    away = render(plane, Camera.from_fov(64, 64, hfov_deg=60.0, world_from_cam=pose))
+    cam = equirect_camera(128, center=(0.0, 0.0, 5.0))
+    a = stitch_rgbd(cube_views[:2], cam)
+    b = stitch_rgbd(cube_views[:2] + [away], cam)
+    assert np.array_equal(a.color, b.color) and np.array_equal(a.holes, b.holes)
+    alone = stitch_rgbd([away], cam)
+    assert alone.holes.all() and (alone.winner == -1).all()
+
+
+def test_pack_layouts(cube_views):
+    pair = ods_from_views(cube_views, 64)
+    assert pack_ods(pair, "top-bottom").shape == (64, 64, 3)
+    assert np.array_equal(pack_ods(pair, "top-bottom")[:32], pair.left.color)  # left eye on top
+    assert pack_ods(pair, "sbs").shape == (32, 128, 3)
+    ana = pack_ods(pair, "anaglyph")
+    assert np.array_equal(ana[..., 0], pair.left.color[..., 0]) and np.array_equal(ana[..., 1:], pair.right.color[..., 1:])
+    lf, rf = pack_ods(pair, "cube")
+    assert set(lf) == {"+x", "-x", "+y", "-y", "+z", "-z"} and lf["+z"].shape == (16, 16, 3)
+    with pytest.raises(ValueError, match="layout"):
+        pack_ods(pair, "diagonal")
+    with pytest.raises(TypeError, match="pair"):
+        pack_ods((pair.left, pair.right))
+    assert isinstance(pair, OdsPair)
+
+
+def test_bad_inputs_are_refused_clearly(cube_views):
+    v = cube_views[0]
+    with pytest.raises(ValueError, match="no depth"):
+        stitch_rgbd([View(v.color, None, v.camera, "flat")], 64)
+    with pytest.raises(ValueError, match="at least one"):
+        stitch_rgbd([], 64)
+    with pytest.raises(TypeError, match="views\\[0\\]"):
+        stitch_rgbd(["a.json"], 64)
+    with pytest.raises(ValueError, match="ipd"):
+        ods_from_views(cube_views, 64, ipd=0.0)
+    with pytest.raises(ValueError, match="ipd"):
+        ods_from_views(cube_views, 64, ipd=-0.06)
+    with pytest.raises(ValueError, match="fade"):
+        ods_from_views(cube_views, 64, fade_start_deg=80, fade_end_deg=60)
+    with pytest.raises(TypeError, match="camera"):
+        stitch_rgbd(cube_views, "equirect")
+    with pytest.raises(ValueError, match="width"):
+        equirect_camera(101)
+    with pytest.raises(ValueError, match="range_"):
+        ods_from_panorama(np.zeros((8, 16, 3), np.float32), -np.ones((8, 16), np.float32))
+
+
+# ------------------------------------------------------------------------------------- CLI
+RIG = sorted(str(p) for p in (DATA_DIR / "rig").glob("rig_*.json"))
+
+
+def test_cli_stitch_mono_and_ods_on_the_bundled_rig(tmp_path, capsys):
+    assert len(RIG) == 10
+    out = tmp_path / "pano.png"
+    assert cli.main(["stitch", *RIG, "-o", str(out), "--width", "256", "--holes-out", str(tmp_path / "h.png")]) == 0
+    pano = read_image(out)
+    depth = read_depth(tmp_path / "pano_depth.exr")
+    assert pano.shape == (128, 256, 3) and depth.shape == (128, 256)
+    truth, rng = render_spherical(make_scene("capture"), equirect_camera(256), supersample=2)
+    assert psnr(pano / 255.0, truth, np.isfinite(depth)) > 32.0
+    err = capsys.readouterr().err
+    assert "stitch 10/10" in err and "seen" in err
+    ods = tmp_path / "ods.png"
+    assert cli.main(["stitch", *RIG, "-o", str(ods), "--stereo", "ods", "--width", "256", "--depth-out", "none"]) == 0
+    assert read_image(ods).shape == (256, 256, 3)
+    assert not (tmp_path / "ods_depth.exr").exists()
+    sbs = tmp_path / "sbs.png"
+    assert cli.main(["stitch", *RIG, "-o", str(sbs), "--stereo", "ods", "--width", "128", "--layout", "sbs"]) == 0
+    assert read_image(sbs).shape == (64, 256, 3)
+    assert read_depth(tmp_path / "sbs_depth.exr").shape == (64, 256)
+
+
+def test_cli_stitch_from_the_bundled_centre_panorama(tmp_path):
+    out = tmp_path / "ods.png"
+    pano = [str(DATA_DIR / "rig" / "capture_pano_color.png"), str(DATA_DIR / "rig" / "capture_pano_range.exr")]
+    assert cli.main(["stitch", "--panorama", *pano, "-o", str(out), "--stereo", "ods", "--width", "256",
+                     "--holes-out", str(tmp_path / "holes.png")]) == 0
+    holes = read_image(tmp_path / "holes.png")
+    assert holes.shape == (256, 256) and 0 < (holes > 0).mean() < 0.05
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--stereo", "ods", "--ipd", "0"], "--ipd"),
+    (["--stereo", "ods", "--fade", "80", "60"], "--fade"),
+    (["--width", "101"], "--width"),
+    (["--layout", "sbs"], "--layout"),
+])
+def test_cli_stitch_bad_arguments(tmp_path, capsys, extra, message):
+    out = tmp_path / "x.png"
+    assert cli.main(["stitch", *RIG[:2], "-o", str(out), *extra]) == 1
+    assert message in capsys.readouterr().err
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_cli_stitch_refuses_views_without_depth_or_pose(tmp_path, capsys):
+    from ibr.io import save_view
+
+    v = load_view(RIG[0])
+    flat = save_view(View(v.color, None, v.camera, "flat"), tmp_path / "flat.json")
+    assert cli.main(["stitch", str(flat), "-o", str(tmp_path / "p.png"), "--width", "64"]) == 1
+    assert "no depth" in capsys.readouterr().err
+    assert cli.main(["stitch", "-o", str(tmp_path / "p.png")]) == 1
+    assert not (tmp_path / "p.png").exists()
+    # an output that is one of the inputs is refused before any work
+    before = (DATA_DIR / "rig" / "rig_00_color.png").read_bytes()
+    assert cli.main(["stitch", *RIG, "-o", str(DATA_DIR / "rig" / "rig_00_color.png"), "--width", "64"]) == 1
+    assert (DATA_DIR / "rig" / "rig_00_color.png").read_bytes() == before
