@@ -183,6 +183,9 @@ def run(args) -> int:
                        ("--depth", args.depth)):
             plan.add_input(opt, p)
         video_file = args.video is not None and out.suffix.lower() in VIDEO_EXTS
+        if args.video is not None and out.suffix and not video_file:
+            raise ValueError(f"-o: with --video, expected a folder for frame_0000.png ... (no extension) or a "
+                             f"video file ({', '.join(VIDEO_EXTS)}), got {out}")
         if args.video is not None and not video_file:
             plan.add_folder("-o", out, patterns=("frame_*.png",))
         elif video_file:
