@@ -63,7 +63,7 @@ class View:
                 depth[~(np.isfinite(depth) & (depth > 0))] = np.nan
             if not np.isnan(depth).all():
                 lo, hi = float(np.nanmin(depth)), float(np.nanmax(depth))
-                if lo < DEPTH_RANGE[0] or hi > DEPTH_RANGE[1]:
+                if lo < np.float32(DEPTH_RANGE[0]) or hi > np.float32(DEPTH_RANGE[1]):  # float32 bounds
                     raise ValueError(f"depth: valid values must lie in [{DEPTH_RANGE[0]:g}, {DEPTH_RANGE[1]:g}] "
                                      f"scene units, got {lo:.6g}..{hi:.6g} (rescale the depth, e.g. a view "
                                      "file's depth 'scale')")

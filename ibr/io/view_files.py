@@ -245,7 +245,10 @@ def load_view(path) -> View:
             raise ValueError(f"{where}: depth {depth_path.name} is {stored.shape[1]}x{stored.shape[0]} but color "
                              f"{color_path.name} is {color.shape[1]}x{color.shape[0]}")
         z = _depth.sanitize_depth(_decode_depth(stored, encoding, p, camera))[0]
-    return View(color, z, camera, name)
+    try:
+        return View(color, z, camera, name)
+    except (TypeError, ValueError) as exc:  # e.g. depths outside DEPTH_RANGE: name the file (#12)
+        raise type(exc)(f"{where}: {exc}") from None
 
 
 def load_camera(path, *, what: str = "camera file") -> Camera:

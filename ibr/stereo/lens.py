@@ -39,7 +39,7 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from ..base.validate import check_array, check_choice, check_finite_scalar, check_image, check_positive
+from ..base.validate import COLOR_DTYPES, check_array, check_choice, check_finite_scalar, check_image, check_positive
 
 __all__ = [
     "RadialDistortion",
@@ -283,6 +283,8 @@ def predistort(image, lens, *, center_px=None, scale_px: float | None = None,
     for the pixel convention.
     """
     img = check_image("image", image)
+    if img.dtype.name not in COLOR_DTYPES:  # cv2.remap has no kernel for the others (#12)
+        raise TypeError(f"image: expected a colour dtype {', '.join(COLOR_DTYPES)}, got {img.dtype}")
     lenses = _lenses(lens)
     h, w = img.shape[:2]
     if len(lenses) == 1:
