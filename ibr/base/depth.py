@@ -18,6 +18,20 @@ reversed z     w_rev = 1 - w (finite far), or n / z (infinite far plane)
 
 Quantization step of a fixed-point buffer at depth z (one code step):
 ``dz = z^2 * (f - n) / (n * f * (2^bits - 1))`` to first order; see :func:`zbuffer_step`.
+
+Quantization of every encoding (:class:`DepthQuantization`)
+------------------------------------------------------------
+Stored depth is often quantized: integer disparities (8-bit maps), millimetre codes (16-bit
+sensor PNGs), the codes of a 16/24-bit z-buffer. In inverse depth q = 1/z every one of them has a
+step of the form ``dq(q) = c0 + c2 q^2``:
+
+* disparity with step s (pixels): q = (d + doffs) / (B f)  ->  ``c0 = s / (B f)``
+* window / fixed-point z-buffer codes (bits b): q = (1 - w (f - n) / f) / n  ->
+  ``c0 = (f - n) / (n f (2^b - 1))``
+* planar z (or range) stored in codes of ``scale`` scene units: dz = scale  ->  ``c2 = scale``
+  (dq = dz / z^2 to first order; range codes are at most this coarse in z)
+
+:func:`zbuffer_step`, :func:`disparity_step` and :func:`code_step` give the step in z.
 """
 
 from __future__ import annotations
@@ -27,6 +41,11 @@ import numpy as np
 from .validate import check_array, check_finite_scalar, check_near_far as _near_far, check_positive
 
 __all__ = [
+    "DepthQuantization",
+    "code_step",
+    "disparity_step",
+    "quantization_of",
+    "set_quantization",
     "disparity_from_z",
     "fixed_from_z",
     "range_from_z",
@@ -255,3 +274,159 @@ def zprime_from_z(z, *, near: float, far: float, scale: float = ZPRIME_SCALE) ->
 def z_from_zprime(zp, *, near: float, far: float, scale: float = ZPRIME_SCALE) -> np.ndarray:
     """Inverse of :func:`zprime_from_z` (float32 planar z)."""
     return z_from_window(_float("zp", zp) / scale, near=near, far=far)
+
+
+# ----------------------------------------------------------------------------- quantization
+def disparity_step(z, *, baseline: float, focal_px: float, doffs: float = 0.0, step: float = 1.0) -> np.ndarray:
+    """Depth change (scene units) of one disparity code of ``step`` pixels at depth z.
+
+    Exact: ``z(d - step) - z(d)`` with ``d = B f / z - doffs`` (the next code *farther* away);
+    to first order ``z^2 step / (B f)``. NaN where the farther code has d + doffs <= 0.
+    Example: B = 0.24, f = 443.4 px, integer disparities: 0.0095 at z = 1, 0.24 at z = 5.
+    """
+    b = check_positive("baseline", baseline)
+    f = check_positive("focal_px", focal_px)
+    s = check_positive("step", step)
+    z = _float("z", z)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        den = b * f / z - s
+        far = np.where(valid_mask(z) & (den > 0), b * f / den, np.nan)
+    return far - z
+
+
+def code_step(z, *, scale: float) -> np.ndarray:
+    """Depth change of one code of a depth stored as integers of ``scale`` scene units (e.g.
+    a 16-bit PNG in millimetres: scale = 0.001 m): ``scale`` at every valid z, NaN elsewhere."""
+    sc = check_positive("scale", scale)
+    z = _float("z", z)
+    return np.where(valid_mask(z), sc, np.nan)
+
+
+class DepthQuantization:
+    """Quantization step of a depth encoding as a function of depth.
+
+    The step in inverse depth q = 1/z is ``dq(q) = c0 + c2 q^2`` (module docstring): ``c0`` for
+    encodings uniform in 1/z (disparity, z-buffer codes), ``c2`` for encodings uniform in z
+    (millimetre codes). Build one with :meth:`disparity`, :meth:`zbuffer`, :meth:`codes`,
+    or :meth:`from_encoding` (a view file's encoding and parameters). Immutable and hashable
+    (meshes are cached per quantization).
+
+    Examples
+    --------
+    >>> q = DepthQuantization.disparity(baseline=0.24, focal_px=443.4)   # integer disparities
+    >>> round(float(q.step(2.0)), 4)                                        # scene units at z = 2
+    0.0376
+    """
+
+    __slots__ = ("c0", "c2")
+
+    def __init__(self, c0: float = 0.0, c2: float = 0.0):
+        for name, v in (("c0", c0), ("c2", c2)):
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not np.isfinite(v) or v < 0:
+                raise ValueError(f"{name}: expected a finite number >= 0, got {v!r}")
+        object.__setattr__(self, "c0", float(c0))
+        object.__setattr__(self, "c2", float(c2))
+
+    def __setattr__(self, name, value):
+        raise AttributeError("DepthQuantization is immutable")
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, DepthQuantization) and (self.c0, self.c2) == (other.c0, other.c2)
+
+    def __hash__(self) -> int:
+        return hash((DepthQuantization, self.c0, self.c2))
+
+    def __lt__(self, other) -> bool:  # sortable, so option dicts holding one can be sorted
+        return (self.c0, self.c2) < (other.c0, other.c2)
+
+    def __repr__(self) -> str:
+        return f"DepthQuantization(c0={self.c0:.6g}, c2={self.c2:.6g})"
+
+    # -------------------------------------------------------------- constructors
+    @classmethod
+    def disparity(cls, *, baseline: float, focal_px: float, step: float = 1.0) -> "DepthQuantization":
+        """Disparity stored in codes of ``step`` pixels (``scale`` of a view file)."""
+        return cls(c0=check_positive("step", step) / (check_positive("baseline", baseline)
+                                                       * check_positive("focal_px", focal_px)))
+
+    @classmethod
+    def zbuffer(cls, *, near: float, far: float, bits: int) -> "DepthQuantization":
+        """Window depth in ``bits``-bit codes (fixed16/fixed24; float32 window depth is as coarse
+        as 24 bits)."""
+        bits = _check_bits(bits)
+        n, f = _near_far(near, far)
+        ratio = 1.0 if np.isinf(f) else (f - n) / f
+        return cls(c0=ratio / (n * (2**bits - 1)))
+
+    @classmethod
+    def codes(cls, scale: float) -> "DepthQuantization":
+        """Planar depth (or range) stored as integers of ``scale`` scene units."""
+        return cls(c2=check_positive("scale", scale))
+
+    @classmethod
+    def from_encoding(cls, encoding: str, params: dict, *, integer: bool) -> "DepthQuantization | None":
+        """The quantization implied by a view file's depth ``encoding`` and its ``params``
+        (``integer``: the stored file holds integer codes, e.g. a 16-bit PNG). For ``z``,
+        ``range`` and ``disparity`` a ``step`` parameter (stored units per code, before
+        ``scale``) overrides the default of one code; float files without a ``step`` are taken
+        as unquantized (None). Float32 window, reversed and z' depth are as coarse as 24-bit
+        codes."""
+        step = params.get("step")
+        scale = params.get("scale", 1.0)
+        if encoding in ("fixed16", "fixed24"):
+            return cls.zbuffer(near=params["near"], far=params["far"], bits=16 if encoding == "fixed16" else 24)
+        if encoding in ("window", "reversed", "zprime"):  # float32 window depth: as coarse as 24 bits
+            return cls.zbuffer(near=params["near"], far=params["far"], bits=24)
+        if step is None and not integer:
+            return None
+        units = (1.0 if step is None else float(step)) * scale
+        if encoding == "disparity":
+            return cls.disparity(baseline=params["baseline"], focal_px=params["focal_px"], step=units)
+        return cls.codes(units)  # "z", "range"
+
+    # -------------------------------------------------------------- steps
+    def inv_step(self, q):
+        """Step in inverse depth (1/scene units) at inverse depth ``q``."""
+        q = np.asarray(q, np.float64)
+        return self.c0 + self.c2 * q * q
+
+    def step(self, z):
+        """Step in planar depth (scene units) at depth ``z``, to first order: ``dq z^2``."""
+        z = np.asarray(z, np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.c0 * z * z + self.c2
+
+    def max_inv_step(self, depth) -> float:
+        """Largest inverse-depth step over the valid pixels of ``depth`` (at the nearest one)."""
+        if self.c2 == 0:
+            return self.c0
+        z = np.asarray(depth)
+        with np.errstate(invalid="ignore"):
+            v = z[np.isfinite(z) & (z > 0)]
+        return self.c0 + (self.c2 / float(v.min()) ** 2 if v.size else 0.0)
+
+
+import weakref as _weakref
+
+_quantization_of: "_weakref.WeakKeyDictionary" = _weakref.WeakKeyDictionary()
+
+
+def set_quantization(view, quantization: "DepthQuantization | None"):
+    """Record the quantization of ``view``'s depth (what :func:`ibr.io.load_view` does for a
+    view file's encoding); :func:`ibr.build_mesh` uses it when not given ``quantization=``.
+    Returns ``view``."""
+    if quantization is not None and not isinstance(quantization, DepthQuantization):
+        raise TypeError(f"quantization: expected a DepthQuantization or None, got {type(quantization).__name__}")
+    if quantization is None:
+        _quantization_of.pop(view, None)
+    else:
+        _quantization_of[view] = quantization
+    return view
+
+
+def quantization_of(view) -> "DepthQuantization | None":
+    """The quantization recorded for ``view`` (:func:`set_quantization`), or None."""
+    try:
+        return _quantization_of.get(view)
+    except TypeError:
+        return None

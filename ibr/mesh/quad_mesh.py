@@ -199,6 +199,7 @@ def build_mesh(
     near: float | None = None,
     far: float | None = None,
     min_band: int = 1,
+    quantization=None,
 ) -> QuadMesh:
     """Adaptive planar quad mesh of a view's depth (seed 002 section 1.2, improved).
 
@@ -224,6 +225,11 @@ def build_mesh(
         Clip planes that define z'; default the view's depth range.
     min_band : int
         The seed's "large enough" band, in lines (``paper``/``separate``).
+    quantization : DepthQuantization, optional
+        Quantization step of the depth's encoding (:class:`ibr.base.depth.DepthQuantization`);
+        default: what :func:`ibr.io.load_view` recorded for the view's file
+        (:func:`ibr.base.depth.quantization_of`), else none. Edges and plane tolerances then
+        ignore steps of one code (:func:`ibr.mesh.segment.segment`).
 
     Returns
     -------
@@ -236,6 +242,7 @@ def build_mesh(
     >>> mesh = build_mesh(view, threshold=2**15, method="paper")  # doctest: +SKIP
     """
     from .segment import segment
+    from ..base.depth import quantization_of
     from ..base.view import View
 
     if not isinstance(view, View):
@@ -252,6 +259,7 @@ def build_mesh(
         near=near,
         far=far,
         min_band=min_band,
+        quantization=quantization if quantization is not None else quantization_of(view),
     )
     return _mesh_from_segmentation(view.camera, depth, seg, t0)
 
@@ -271,6 +279,7 @@ def _mesh_from_segmentation(camera, depth, seg, t0) -> QuadMesh:
         "baseline": seg.baseline,
         "near": seg.near,
         "far": seg.far,
+        "quantization": seg.quantization,
         "seconds_segment": seg.seconds,
         "seconds_total": time.perf_counter() - t0,
     }

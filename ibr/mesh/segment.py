@@ -72,6 +72,11 @@ DEFAULT_MAX_ERROR_PX = 0.5
 DEFAULT_BASELINE_FRACTION = 0.05
 #: ``edge`` method: break edges where a second difference exceeds this fraction of the tolerance.
 DEFAULT_BREAK_FRACTION = 1.0
+#: Quantized depth: second differences up to this many codes never break an edge (a one-code step
+#: gives one code; a curved staircase two at most)...
+QUANT_BREAK_CODES = 2.0
+#: ... and a plane may deviate this many codes from the stored (rounded) values.
+QUANT_FIT_CODES = 0.5
 #: ``edge`` method: a failed fit is cut at its most bent line when that line's mean |second
 #: difference| exceeds this multiple of the average line (a crease), else in the middle.
 CREASE_PEAK = 5.0
@@ -454,6 +459,7 @@ class Segmentation:
     max_error_px: float | None
     baseline: float | None
     seconds: float
+    quantization: object = None
 
     @property
     def zprime(self) -> np.ndarray:
@@ -474,6 +480,7 @@ def segment(
     far: float | None = None,
     min_band: int = 1,
     break_fraction: float = DEFAULT_BREAK_FRACTION,
+    quantization=None,
 ) -> Segmentation:
     """Segment a planar depth map into rectangles that are planar in 1/z.
 
@@ -497,6 +504,13 @@ def segment(
         derived tolerance as their threshold, without a guarantee.
     near, far : float, optional
         Clip planes of z'; default: the view's depth range (:func:`auto_near_far`).
+    quantization : DepthQuantization, optional
+        The quantization of the depth's encoding (:class:`ibr.base.depth.DepthQuantization`).
+        A staircase of one-code steps on a smooth surface is a plane: second differences of
+        one code (``dq``, in 1/z, taken at the nearest pixel) never break an edge (break
+        threshold ``max(break, QUANT_BREAK_CODES * dq)``), and a plane is accepted within
+        ``tolerance + QUANT_FIT_CODES * dq`` of the stored codes (the codes themselves are only
+        known to half a step).
     """
     check_choice("method", method, METHODS)
     if threshold is not None and max_error_px is not None:
@@ -534,13 +548,16 @@ def segment(
         thr = tol_q * scale
     else:
         thr = check_positive("threshold", threshold)
+    dq = _quant_step(quantization, z)
     if method == "edge":
         bf = check_positive("break_fraction", break_fraction)
-        rects = split_rects(q, method=method, threshold=thr / scale, break_threshold=bf * thr / scale)
+        rects = split_rects(q, method=method, threshold=thr / scale,
+                            tolerance=thr / scale + QUANT_FIT_CODES * dq,
+                            break_threshold=max(bf * thr / scale, QUANT_BREAK_CODES * dq))
     else:
-        rects = split_rects(q, method=method, threshold=thr / scale, min_band=min_band)
+        rects = split_rects(q, method=method, threshold=max(thr / scale, QUANT_BREAK_CODES * dq), min_band=min_band)
     seconds = time.perf_counter() - t0
-    tol = thr if method == "edge" else None
+    tol = thr + QUANT_FIT_CODES * dq * scale if method == "edge" else None
     return Segmentation(
         rects=rects,
         inv_depth=q,
@@ -553,7 +570,20 @@ def segment(
         max_error_px=max_error_px,
         baseline=baseline,
         seconds=seconds,
+        quantization=quantization,
     )
+
+
+def _quant_step(quantization, z) -> float:
+    """Inverse-depth step of one code (0 without quantization)."""
+    if quantization is None:
+        return 0.0
+    from ..base.depth import DepthQuantization
+
+    if not isinstance(quantization, DepthQuantization):
+        raise TypeError(f"quantization: expected an ibr.base.depth.DepthQuantization, got "
+                        f"{type(quantization).__name__}")
+    return float(quantization.max_inv_step(z))
 
 
 def _median_depth(z) -> float:

@@ -20,15 +20,26 @@ def _store(out, v, u, ch, x, is_int, maxval):
         out[v, u, ch] = x
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _trust_weights(wa, wb, ka, kb):
+    """Blend weights of two agreeing layers scaled by their trust (1 clean, ~0 a mixed silhouette
+    pixel); a small floor keeps the viewpoint weights when both are mixed."""
+    xa = wa * (ka + 1e-3)
+    xb = wb * (kb + 1e-3)
+    s = xa + xb
+    return xa / s, xb / s
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
-def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, depth, coverage):
+def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, depth, coverage, use_trust, ka, kb):
     """Two-layer composite (seed 002 section 2.2 step (1) and the depth-aware blend).
 
     ca, cb (H, W, C) float32 colors, za, zb (H, W) float32 depths (NaN uncovered), wa >= wb the
     viewpoint weights (layer a is the nearer source). blend=False: a in front, b fills a's holes.
     blend=True: where both cover and ``|za - zb| <= rel_tol * min(za, zb)`` the colors and depths
-    are mixed with weights wa, wb; elsewhere the nearer surface wins. ``out`` may be an integer
-    array (values rounded and clipped to [0, maxval])."""
+    are mixed with weights wa, wb (scaled by the per-pixel trust ka, kb when ``use_trust``);
+    elsewhere the nearer surface wins. ``out`` may be an integer array (values rounded and
+    clipped to [0, maxval])."""
     h, w, nc = ca.shape
     for v in prange(h):
         for u in range(w):
@@ -38,9 +49,12 @@ def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, dept
             has_b = b > 0.0
             if has_a and has_b:
                 if blend and abs(a - b) <= rel_tol * min(a, b):
+                    xa, xb = wa, wb
+                    if use_trust:
+                        xa, xb = _trust_weights(wa, wb, ka[v, u], kb[v, u])
                     for ch in range(nc):
-                        _store(out, v, u, ch, wa * ca[v, u, ch] + wb * cb[v, u, ch], is_int, maxval)
-                    depth[v, u] = wa * a + wb * b
+                        _store(out, v, u, ch, xa * ca[v, u, ch] + xb * cb[v, u, ch], is_int, maxval)
+                    depth[v, u] = xa * a + xb * b
                 elif (not blend) or a <= b:
                     for ch in range(nc):
                         _store(out, v, u, ch, ca[v, u, ch], is_int, maxval)
@@ -103,13 +117,23 @@ def _sample_store(src, x, y, out, v, u, is_int, maxval):
         _store(out, v, u, ch, _lerp(src, x0, x1, y0, y1, ax, ay, ch), is_int, maxval)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _lerp1(src, x0, x1, y0, y1, ax, ay):
+    """Bilinear interpolation of a single-channel (H, W) float32 map."""
+    top = src[y0, x0] + ax * (src[y0, x1] - src[y0, x0])
+    bot = src[y1, x0] + ax * (src[y1, x1] - src[y1, x0])
+    return top + ay * (bot - top)
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
-                      out, depth, coverage):
+                      out, depth, coverage, use_trust, ka, kb):
     """Fused bilinear sampling + two-layer composite (see composite2): layer colors are sampled
     (in float32) from the sources sa, sb (any dtype: uint8 sources are read as is, 4x less memory
     traffic than a float32 copy, with identical results) at the maps (ua, va), (ub, vb) only where they are used, so
-    no layer color image is ever written. ``single``: only layer a exists."""
+    no layer color image is ever written. ``single``: only layer a exists. ``use_trust``: the
+    agreeing blend weights are scaled by the source-space trust maps ka, kb (same size as sa,
+    sb), sampled with the same bilinear taps."""
     h, w, nc = out.shape
     for v in prange(h):
         for u in range(w):
@@ -124,10 +148,14 @@ def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel
                 if blend and abs(a - b) <= rel_tol * min(a, b):
                     p0, p1, p2, p3, pax, pay = _taps(sa, ua[v, u], va[v, u])
                     q0, q1, q2, q3, qax, qay = _taps(sb, ub[v, u], vb[v, u])
+                    xa, xb = wa, wb
+                    if use_trust:
+                        xa, xb = _trust_weights(wa, wb, _lerp1(ka, p0, p1, p2, p3, pax, pay),
+                                                _lerp1(kb, q0, q1, q2, q3, qax, qay))
                     for ch in range(nc):
-                        x = wa * _lerp(sa, p0, p1, p2, p3, pax, pay, ch) + wb * _lerp(sb, q0, q1, q2, q3, qax, qay, ch)
+                        x = xa * _lerp(sa, p0, p1, p2, p3, pax, pay, ch) + xb * _lerp(sb, q0, q1, q2, q3, qax, qay, ch)
                         _store(out, v, u, ch, x, is_int, maxval)
-                    depth[v, u] = wa * a + wb * b
+                    depth[v, u] = xa * a + xb * b
                 elif (not blend) or a <= b:
                     _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
                     depth[v, u] = a

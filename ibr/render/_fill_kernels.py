@@ -185,3 +185,222 @@ def fill_rows_background_reference(color, depth, cov):
             color[v, k] = color[v, src]
             depth[v, k] = depth[v, src]
     return color, depth, holes
+
+
+# ---------------------------------------------------------------------- pull-push (background-weighted)
+@njit(cache=True, error_model="numpy", inline="always")
+def _bg_weight(z, izref, squarings):
+    """Background weight ``(z / zref)^(2^squarings)`` by repeated squaring, floored at 1e-30 so
+    that a region of foreground only still fills."""
+    r = z * izref
+    for _ in range(squarings):
+        r = r * r
+    return max(r, 1e-30)
+
+
+@njit(cache=True, error_model="numpy")
+def pp_pull0(color, depth, holes, izref, squarings, coarse):
+    """Level 0 -> 1 of the pull-push pyramid in one pass: every covered pixel with valid depth
+    enters as ``(w c_0, .., w c_{C-1}, w z, w)`` with the background weight of :func:`_bg_weight`,
+    summed over 2x2 cells into ``coarse`` (last channel: the weight)."""
+    h, w, nc = color.shape
+    hc, wc = coarse.shape[0], coarse.shape[1]
+    for cv in range(hc):
+        for cu in range(wc):
+            for k in range(nc + 2):
+                coarse[cv, cu, k] = 0.0
+        for v in range(2 * cv, min(2 * cv + 2, h)):
+            for u in range(w):
+                z = depth[v, u]
+                if holes[v, u] or not (z > 0.0):
+                    continue
+                wt = _bg_weight(z, izref, squarings)
+                cu = u // 2
+                for k in range(nc):
+                    coarse[cv, cu, k] += wt * np.float32(color[v, u, k])
+                coarse[cv, cu, nc] += wt * z
+                coarse[cv, cu, nc + 1] += wt
+
+
+@njit(cache=True, error_model="numpy")
+def pp_pull(fine, coarse):
+    """2x2 box sums of weighted values and weights (pull step; the last channel is the weight)."""
+    h, w, n = fine.shape
+    hc, wc = coarse.shape[0], coarse.shape[1]
+    for v in range(hc):
+        for u in range(wc):
+            for k in range(n):
+                coarse[v, u, k] = 0.0
+            for dv in range(2):
+                vv = 2 * v + dv
+                if vv >= h:
+                    continue
+                for du in range(2):
+                    uu = 2 * u + du
+                    if uu >= w:
+                        continue
+                    for k in range(n):
+                        coarse[v, u, k] += fine[vv, uu, k]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _up_taps(x, n):
+    """Bilinear taps of fine index x on a coarse axis of n cells (centers at 2i + 0.5)."""
+    c = x // 2
+    if x % 2 == 0:
+        o = c - 1
+    else:
+        o = c + 1
+    o = min(max(o, 0), n - 1)
+    return c, o
+
+
+@njit(cache=True, error_model="numpy")
+def pp_push(sums, coarse_val, eps, need, out_val):
+    """Push step: ``val = (S + e up(V)) / (W + e)`` with ``e = eps * up(W_coarse) / 4``; the
+    coarse level's mean values V (last channel: its weight sum) are upsampled bilinearly
+    (half-pixel centres). Where a fine cell has little (foreground) weight, the coarser,
+    background-dominated value takes over. Only cells flagged in ``need`` are computed."""
+    h, w, n = sums.shape
+    hc, wc = coarse_val.shape[0], coarse_val.shape[1]
+    nv = n - 1
+    for v in range(h):
+        cv, ov = _up_taps(v, hc)
+        for u in range(w):
+            if not need[v, u]:
+                continue
+            cu, ou = _up_taps(u, wc)
+            e = eps * 0.25 * (0.5625 * coarse_val[cv, cu, nv] + 0.1875 * coarse_val[cv, ou, nv]
+                              + 0.1875 * coarse_val[ov, cu, nv] + 0.0625 * coarse_val[ov, ou, nv])
+            den = sums[v, u, nv] + e
+            for k in range(nv):
+                up = (0.5625 * coarse_val[cv, cu, k] + 0.1875 * coarse_val[cv, ou, k]
+                      + 0.1875 * coarse_val[ov, cu, k] + 0.0625 * coarse_val[ov, ou, k])
+                if den > 0.0:
+                    out_val[v, u, k] = (sums[v, u, k] + e * up) / den
+                else:
+                    out_val[v, u, k] = up
+            out_val[v, u, nv] = sums[v, u, nv]
+
+
+@njit(cache=True, error_model="numpy")
+def binomial3(src, need, out):
+    """3x3 binomial ([1 2 1] / 4 in each direction) of ``src`` (H, W, N) at the flagged cells,
+    taps clamped at the border; other cells copy ``src``."""
+    h, w, n = src.shape
+    for v in range(h):
+        v0 = max(v - 1, 0)
+        v2 = min(v + 1, h - 1)
+        for u in range(w):
+            if not need[v, u]:
+                for k in range(n):
+                    out[v, u, k] = src[v, u, k]
+                continue
+            u0 = max(u - 1, 0)
+            u2 = min(u + 1, w - 1)
+            for k in range(n):
+                out[v, u, k] = 0.0625 * (src[v0, u0, k] + src[v0, u2, k] + src[v2, u0, k] + src[v2, u2, k]) \
+                    + 0.125 * (src[v0, u, k] + src[v2, u, k] + src[v, u0, k] + src[v, u2, k]) + 0.25 * src[v, u, k]
+
+
+@njit(cache=True, error_model="numpy")
+def pp_need(fine, coarse):
+    """Cells of the coarser level whose 2x2 children include a flagged cell of ``fine`` (the
+    caller dilates the result by one cell for the bilinear taps)."""
+    h, w = fine.shape
+    hc, wc = coarse.shape
+    for cv in range(hc):
+        for cu in range(wc):
+            coarse[cv, cu] = 0
+    for v in range(h):
+        cv = v // 2
+        for u in range(w):
+            if fine[v, u]:
+                coarse[cv, u // 2] = 1
+
+
+@njit(cache=True, error_model="numpy")
+def covered_max_depth(depth, holes):
+    """Largest valid depth outside the holes (0 when there is none)."""
+    h, w = depth.shape
+    m = 0.0
+    for v in range(h):
+        for u in range(w):
+            z = depth[v, u]
+            if not holes[v, u] and z > m:
+                m = z
+    return m
+
+
+@njit(cache=True, error_model="numpy")
+def axis_background(color, depth, holes, out, ok):
+    """Directional background fill of the hole pixels along rows (pass transposed views for
+    columns): each run of hole pixels takes the colour of the farther of its two covered
+    neighbours on the row (the only one at the border). Writes ``out`` (float32) and ``ok`` at
+    hole pixels only; a row without any covered pixel stays ``ok = False``."""
+    h, w, nc = color.shape
+    for v in range(h):
+        j = 0
+        while j < w:
+            if not holes[v, j]:
+                j += 1
+                continue
+            a = j
+            while j < w and holes[v, j]:
+                j += 1
+            left = a - 1
+            right = j if j < w else -1
+            src = -1
+            if left >= 0 and right >= 0:
+                src = left if depth[v, left] >= depth[v, right] else right
+            elif left >= 0:
+                src = left
+            else:
+                src = right
+            for k in range(a, j):
+                ok[v, k] = src >= 0
+                if src >= 0:
+                    for c in range(nc):
+                        out[v, k, c] = color[v, src, c]
+
+
+@njit(cache=True, error_model="numpy")
+def pp_top(sums, out_val):
+    """Mean values of the coarsest level (last channel: weight sum)."""
+    h, w, n = sums.shape
+    for v in range(h):
+        for u in range(w):
+            wt = sums[v, u, n - 1]
+            for k in range(n - 1):
+                out_val[v, u, k] = sums[v, u, k] / wt if wt > 0.0 else 0.0
+            out_val[v, u, n - 1] = wt
+
+
+@njit(cache=True, error_model="numpy")
+def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, is_int, filled):
+    """Last push step, fused with the write: every hole pixel takes the bilinear upsampling of
+    level 1's values (it has no weight of its own), colour mixed as ``(1 - mix) * pushed + mix
+    * direct`` where the directional background fill exists; depth from the pull-push."""
+    h, w, nc = color.shape
+    hc, wc = coarse_val.shape[0], coarse_val.shape[1]
+    for v in range(h):
+        cv, ov = _up_taps(v, hc)
+        for u in range(w):
+            if not holes[v, u]:
+                continue
+            cu, ou = _up_taps(u, wc)
+            z = (0.5625 * coarse_val[cv, cu, nc] + 0.1875 * coarse_val[cv, ou, nc]
+                 + 0.1875 * coarse_val[ov, cu, nc] + 0.0625 * coarse_val[ov, ou, nc])
+            if not (z > 0.0):
+                continue
+            d = direct_ok[v, u]
+            for k in range(nc):
+                x = (0.5625 * coarse_val[cv, cu, k] + 0.1875 * coarse_val[cv, ou, k]
+                     + 0.1875 * coarse_val[ov, cu, k] + 0.0625 * coarse_val[ov, ou, k])
+                if d:
+                    x = (1.0 - mix) * x + mix * direct[v, u, k]
+                if is_int:
+                    x = np.floor(x + 0.5)
+                color[v, u, k] = x
+            depth[v, u] = z
+            filled[v, u] = True

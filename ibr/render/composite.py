@@ -22,7 +22,17 @@ from ..base.validate import check_choice, check_positive
 from ..base.camera import Camera
 from .rasterize import Layer
 
-__all__ = ["COMPOSITE_MODES", "Composite", "composite", "sample_composite", "viewpoint_weights"]
+__all__ = ["COMPOSITE_MODES", "Composite", "composite", "mixed_pixels", "sample_composite", "source_trust",
+           "viewpoint_weights"]
+
+#: Relative step in inverse depth between 4-neighbours that marks a depth discontinuity (and
+#: that is also ``STEP_RATIO`` times larger than the neighbouring differences on the line).
+STEP_REL = 0.02
+STEP_RATIO = 3.0
+#: Trust of a mixed silhouette pixel in the blend (clean pixels: 1).
+MIXED_TRUST = 0.03
+
+_NO_TRUST = np.ones((1, 1), np.float32)
 
 #: Compositing modes: depth-aware blend (default) and the seed's front/back order.
 COMPOSITE_MODES = ("blend", "front")
@@ -36,6 +46,62 @@ class Composite:
     color: np.ndarray
     depth: np.ndarray
     coverage: np.ndarray
+
+
+def _steps(q: np.ndarray, axis: int, rel: float, ratio: float) -> np.ndarray:
+    """Depth discontinuities between neighbours along ``axis`` of inverse depth ``q`` (NaN
+    invalid): a valid/invalid pair, or ``|dq| > rel * min(q)`` and ``> ratio`` times the
+    larger of the two neighbouring differences on the line (a step, not a steep plane)."""
+    d = np.diff(q, axis=axis)
+    ad = np.abs(d)
+    pad = [(0, 0), (0, 0)]
+    pad[axis] = (1, 1)
+    p = np.pad(np.nan_to_num(ad, nan=0.0), pad)
+    sl = [slice(None), slice(None)]
+    sl[axis] = slice(None, -2)
+    left = p[tuple(sl)]
+    sl[axis] = slice(2, None)
+    right = p[tuple(sl)]
+    n = q.shape[axis]
+    q0, q1 = np.take(q, np.arange(n - 1), axis=axis), np.take(q, np.arange(1, n), axis=axis)
+    with np.errstate(invalid="ignore"):
+        step = (ad > rel * np.fmin(q0, q1)) & (ad > ratio * np.maximum(left, right))
+    return step | (np.isnan(q0) != np.isnan(q1))
+
+
+def mixed_pixels(depth, *, rel: float = STEP_REL, ratio: float = STEP_RATIO) -> np.ndarray:
+    """(H, W) bool: pixels on either side of a depth discontinuity of a source (silhouettes).
+
+    A camera integrates each pixel over its area, so a pixel whose 4-neighbour lies across a
+    depth step (see :data:`STEP_REL`, :data:`STEP_RATIO`; the edge of valid depth counts)
+    holds a mixture of foreground and background colour while its depth is one of the two. Such
+    pixels are marked on *both* sides of the step. Invalid pixels are never marked.
+    """
+    z = np.asarray(depth, np.float64)
+    if z.ndim != 2:
+        raise ValueError(f"depth: expected (H, W), got shape {z.shape}")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = np.where(np.isfinite(z) & (z > 0), 1.0 / z, np.nan)
+    out = np.zeros(q.shape, bool)
+    if q.shape[1] > 1:
+        hs = _steps(q, 1, rel, ratio)
+        out[:, :-1] |= hs
+        out[:, 1:] |= hs
+    if q.shape[0] > 1:
+        vs = _steps(q, 0, rel, ratio)
+        out[:-1] |= vs
+        out[1:] |= vs
+    return out & ~np.isnan(q)
+
+
+def source_trust(depth, *, mixed_trust: float = MIXED_TRUST) -> np.ndarray:
+    """(H, W) float32 trust of each source pixel's colour: ``mixed_trust`` on the mixed pixels
+    of :func:`mixed_pixels`, 1 elsewhere. Sampled bilinearly with the colour, it scales the blend
+    weights where two sources see the same surface, so a clean pixel of the other source wins
+    over a silhouette pixel that carries the other surface's colour (the ghost outline)."""
+    t = np.ones(np.shape(depth), np.float32)
+    t[mixed_pixels(depth)] = np.float32(mixed_trust)
+    return t
 
 
 def viewpoint_weights(camera: Camera, sources) -> np.ndarray:
@@ -66,6 +132,7 @@ def composite(
     mode: str = "blend",
     depth_tol: float = 0.02,
     dtype=np.float32,
+    trust=None,
 ) -> Composite:
     """Combine one or two layers rendered into the same camera.
 
@@ -85,6 +152,9 @@ def composite(
     dtype : numpy dtype
         Output color dtype. Integer outputs are rounded to nearest and clipped to the dtype's
         range (layers hold colors in the source's value scale, see :class:`ibr.render.Layer`).
+    trust : sequence of (H, W) float arrays, optional
+        Per layer, the trust of each target pixel's colour (e.g. :func:`source_trust` sampled
+        like the colour); where the layers agree, the blend weights are scaled by it.
     """
     check_choice("mode", mode, COMPOSITE_MODES)
     depth_tol = check_positive("depth_tol", depth_tol)
@@ -116,8 +186,15 @@ def composite(
         order = (0, 1) if w[0] >= w[1] else (1, 0)
         a, b = layers[order[0]], layers[order[1]]
         wa, wb = float(w[order[0]]), float(w[order[1]])
+    ka = kb = _NO_TRUST
+    use_trust = trust is not None and len(layers) == 2
+    if use_trust:
+        k = [np.ascontiguousarray(t, np.float32) for t in trust]
+        if len(k) != 2 or any(t.shape != (h, wd) for t in k):
+            raise ValueError(f"trust: expected 2 arrays of shape {(h, wd)}, got {[t.shape for t in k]}")
+        ka, kb = k[order[0]], k[order[1]]
     _k.composite2(a.color, a.depth, b.color, b.depth, wa, wb, mode == "blend", depth_tol,
-                  is_int, maxval, out, depth, coverage)
+                  is_int, maxval, out, depth, coverage, use_trust, ka, kb)
     return Composite(out, depth, coverage)
 
 
@@ -129,6 +206,7 @@ def sample_composite(
     mode: str = "blend",
     depth_tol: float = 0.02,
     dtype=np.float32,
+    trust=None,
 ) -> Composite:
     """Sample and composite in one pass: :func:`composite` of the layers that bilinear sampling of
     ``sources`` at ``maps`` would give, without materializing the layer colors.
@@ -143,6 +221,9 @@ def sample_composite(
         columns 3 and 4), target depth (NaN uncovered); all of the target size.
     weights, mode, depth_tol, dtype
         As in :func:`composite`.
+    trust : sequence of (H_s, W_s) float32 arrays, optional
+        Per source, :func:`source_trust` (source pixel grid); sampled with the colour's
+        bilinear taps, it scales the blend weights where the layers agree.
 
     Notes
     -----
@@ -178,6 +259,14 @@ def sample_composite(
         a, b = (0, 1) if w[0] >= w[1] else (1, 0)
         wa, wb, single = float(w[a]), float(w[b]), False
     ma, mb = maps[a], maps[b]
+    ka = kb = _NO_TRUST
+    use_trust = trust is not None and not single
+    if use_trust:
+        k = [np.ascontiguousarray(t, np.float32) for t in trust]
+        if len(k) != 2 or any(t.shape != s.shape[:2] for t, s in zip(k, sources)):
+            raise ValueError("trust: expected one (H_s, W_s) array per source, of the source's size")
+        ka, kb = k[a], k[b]
     _k.sample_composite2(sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u, mb.map_v, mb.depth,
-                         single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage)
+                         single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage,
+                         use_trust, ka, kb)
     return Composite(out, depth, coverage)

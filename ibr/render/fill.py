@@ -7,6 +7,12 @@
   foreground objects, so each hole pixel takes the farther (background) of its nearest covered
   neighbours along the row and the column, never the foreground; the filled depth is the
   background's.
+* ``fill_pullpush`` (the single-frame default): a background-weighted pull-push pyramid. Each
+  covered pixel enters with the weight ``(z / z_max)^power``, so wherever near and far surfaces
+  meet in a pyramid cell the farther one (the background a disocclusion opens onto) dominates;
+  the push spreads those colours smoothly in 2-D (no row or column streaks), a 3x3
+  binomial at half resolution removes the pyramid's block structure, and 30 % of the background side *along the
+  parallax axis* (where a disocclusion's hidden background continues) restores detail.
 * ``fill_background_rows``: the same rule along rows only, for horizontal-only parallax (stereo
   pairs, seed 003): each run of uncovered pixels takes the deeper of its two row neighbours.
 
@@ -22,10 +28,17 @@ import numpy as np
 from . import _fill_kernels as _k
 from ..base.validate import check_array, check_image, check_positive
 
-__all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous"]
+__all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous", "fill_pullpush", "parallax_axis"]
 
-#: Fill modes accepted by :func:`ibr.interpolate` and ``ibr interpolate --fill``.
-FILLS = ("previous", "inpaint", "none")
+#: Fill modes accepted by :func:`ibr.interpolate` and ``ibr interpolate --fill``: the previous
+#: frame (sequences), the background pull-push ("inpaint"), issue 4's directional background
+#: fill ("background"), or none.
+FILLS = ("previous", "inpaint", "background", "none")
+
+#: Pull-push defaults (tuned on the Middlebury motorcycle's disocclusions, docs/edges.md).
+PULLPUSH_POWER = 32.0
+PULLPUSH_EPS = 0.05
+PULLPUSH_MIX = 0.3
 
 
 def _check(color, depth, holes):
@@ -116,6 +129,122 @@ def _fill_background_inplace(color, depth, holes, *, depth_tol: float = 0.05, ma
     if holes.any():
         _k.background_fill(color, depth, np.ascontiguousarray(holes), depth_tol, max_dist,
                            color.dtype.kind in "ui", filled)
+    return filled
+
+
+def fill_pullpush(color, depth, holes, *, axis: int = 0, power: float = PULLPUSH_POWER,
+                  eps: float = PULLPUSH_EPS, smooth: bool = True, mix: float = PULLPUSH_MIX):
+    """Streak-free single-frame fill: background-weighted pull-push (see the module docstring).
+
+    Parameters
+    ----------
+    color : (H, W, C) array (any dtype; integer results are rounded)
+    depth : (H, W) float32 planar depth of the covered pixels (NaN where unknown)
+    holes : (H, W) bool
+        Pixels to fill; every other pixel is returned bit-identical.
+    axis : {0, 1}
+        Image axis along which the parallax of the camera move runs (0: rows, horizontal
+        parallax as in a stereo pair; 1: columns); see :func:`parallax_axis`. Disocclusions open
+        along it, so the background continues along it.
+    power : float
+        Background preference: a covered pixel weighs ``(z / z_max)^power`` (32: a surface at
+        80 % of the farthest depth weighs 1e-3 of it); rounded to a power of two.
+    eps : float
+        Push strength of the coarser (smoother, more background) level against a cell's own
+        weight: ``value = (S + e up) / (W + e)``, ``e = eps * up(W_coarse) / 4``.
+    smooth : bool
+        Smooth the half-resolution level with a 3x3 binomial kernel before the last push
+        (removes the pyramid's block structure).
+    mix : float
+        Share of the directional background fill along ``axis`` (each run of hole pixels takes
+        the farther of its two neighbours on the axis, as :func:`fill_background_rows`) in the
+        written colour (0: pull-push only).
+
+    Returns
+    -------
+    color, depth, filled
+        New arrays. Hole pixels get colour and a background depth; ``filled`` marks them (all
+        holes, unless no pixel of the image is covered).
+    """
+    color, depth, holes = _check(color, depth, holes)
+    out = np.ascontiguousarray(color).copy()
+    z = np.ascontiguousarray(depth, dtype=np.float32).copy()
+    return out, z, _fill_pullpush_inplace(out, z, holes, axis=axis, power=power, eps=eps, smooth=smooth, mix=mix)
+
+
+def parallax_axis(camera, sources) -> int:
+    """Image axis along which parallax runs for a move from ``sources`` (cameras) to ``camera``:
+    0 (rows) when the sources' centres, seen from the target camera, are displaced more along x
+    than along y (in pixels at unit depth, ``fx |t_x|`` vs ``fy |t_y|``), else 1 (columns).
+    A pure rotation gives 0."""
+    cx = cy = 0.0
+    for s in sources:
+        t = camera.cam_from_world[:3, :3] @ s.position + camera.cam_from_world[:3, 3]
+        cx += abs(camera.fx * t[0])
+        cy += abs(camera.fy * t[1])
+    return 0 if cx >= cy else 1
+
+
+def _pyramid_sizes(h: int, w: int) -> list[tuple[int, int]]:
+    sizes = [(h, w)]
+    while sizes[-1][0] > 1 or sizes[-1][1] > 1:
+        hh, ww = sizes[-1]
+        sizes.append(((hh + 1) // 2, (ww + 1) // 2))
+    return sizes
+
+
+def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER, eps=PULLPUSH_EPS, smooth=True,
+                           mix=PULLPUSH_MIX) -> np.ndarray:
+    """:func:`fill_pullpush` writing into ``color`` (C-contiguous (H, W, C)) and ``depth``
+    (C-contiguous float32); returns ``filled``. Internal: callers own both arrays."""
+    import cv2
+
+    if axis not in (0, 1):
+        raise ValueError(f"axis: expected 0 (rows) or 1 (columns), got {axis!r}")
+    power = check_positive("power", power)
+    eps = check_positive("eps", eps)
+    if not 0 <= mix <= 1:
+        raise ValueError(f"mix: expected a number in [0, 1], got {mix!r}")
+    holes = np.ascontiguousarray(holes)
+    filled = np.zeros(holes.shape, np.bool_)
+    zmax = _k.covered_max_depth(depth, holes)
+    if not holes.any() or not zmax > 0:
+        return filled
+    h, w, nc = color.shape
+    squarings = max(int(round(np.log2(power))), 0)
+    sizes = _pyramid_sizes(h, w)
+    izref = np.float32(1.0 / zmax)
+    sums = [None] + [np.empty((hh, ww, nc + 2), np.float32) for hh, ww in sizes[1:]]
+    _k.pp_pull0(color, depth, holes, izref, squarings, sums[1])
+    for lv in range(2, len(sizes)):
+        _k.pp_pull(sums[lv - 1], sums[lv])
+    # push: each level only where the finer level reads it (parents of needed cells + 1 cell)
+    k3 = np.ones((3, 3), np.uint8)
+    need = [holes.view(np.uint8)]
+    for lv, (hh, ww) in enumerate(sizes[1:], 1):
+        nxt = np.empty((hh, ww), np.uint8)
+        _k.pp_need(need[-1], nxt)
+        # + the bilinear taps (and at level 1 the 3x3 smoothing's taps)
+        nxt = cv2.dilate(nxt, k3, iterations=2 if (lv == 1 and smooth) else 1)
+        need.append(nxt)
+    val = np.empty_like(sums[-1])
+    _k.pp_top(sums[-1], val)
+    for lv in range(len(sizes) - 2, 0, -1):
+        nxt = np.empty_like(sums[lv])
+        _k.pp_push(sums[lv], val, np.float32(eps), need[lv], nxt)
+        val = nxt
+    if smooth and len(sizes) > 1:  # 3x3 binomial at half resolution: no pyramid blocks
+        sm = np.empty_like(val)
+        _k.binomial3(val, need[1], sm)
+        val = sm
+    direct = np.empty((h, w, nc), np.float32)
+    direct_ok = np.zeros((h, w), np.bool_)
+    if mix > 0:  # background side along the parallax axis (rows or columns)
+        if axis == 1:
+            _k.axis_background(color.transpose(1, 0, 2), depth.T, holes.T, direct.transpose(1, 0, 2), direct_ok.T)
+        else:
+            _k.axis_background(color, depth, holes, direct, direct_ok)
+    _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, color.dtype.kind in "ui", filled)
     return filled
 
 

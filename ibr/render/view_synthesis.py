@@ -23,8 +23,8 @@ import numpy as np
 
 from ..base.validate import check_choice, check_finite_scalar, check_positive
 from ..base.camera import Camera, interpolate_cameras
-from .composite import COMPOSITE_MODES, composite, sample_composite, viewpoint_weights
-from .fill import FILLS, _fill_background_inplace
+from .composite import COMPOSITE_MODES, composite, sample_composite, source_trust, viewpoint_weights
+from .fill import FILLS, _fill_background_inplace, _fill_pullpush_inplace, parallax_axis
 from .rasterize import FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_into, as_float_color, sample_maps, scratch, scratch_maps
 from ..base.view import View
 
@@ -33,12 +33,16 @@ __all__ = [
     "Rendering",
     "interpolate",
     "iter_interpolate",
+    "lod_baseline",
     "source_mesh",
     "warp",
 ]
 
 #: Rendering methods: quad-mesh inverse warp (default) or per-pixel forward splat.
 METHODS = ("mesh", "forward")
+
+#: Level-of-detail sources: the camera move of the call (default) or 5 % of the median depth.
+LODS = ("move", "depth")
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,7 +96,20 @@ class _Source:
     def __init__(self, view: View):
         self.raw = np.ascontiguousarray(view.color if view.color.ndim == 3 else view.color[..., None])
         self._color = None
+        self._depth = view.depth
         self.meshes: dict = {}
+        self._trust: dict = {}
+
+    def trust(self, mesh_key) -> np.ndarray:
+        """(H, W) float32 :func:`~ibr.render.composite.source_trust` of the source (mixed
+        silhouette pixels low), from the depth of its mesh for ``mesh_key`` (planes: quantized
+        depth codes are no steps) or, for ``None`` (forward splat), from the raw depth."""
+        t = self._trust.get(mesh_key)
+        if t is None:
+            depth = self._depth if mesh_key is None else self.meshes[mesh_key].depth()
+            t = self._trust[mesh_key] = source_trust(depth)
+            t.setflags(write=False)
+        return t
 
     @property
     def color(self) -> np.ndarray:
@@ -122,7 +139,7 @@ def source_mesh(view: View, **mesh_options):
     """
     _check_source(view, "view")
     src = _source(view)
-    key = tuple(sorted(mesh_options.items()))
+    key = _mesh_key(mesh_options)
     mesh = src.meshes.get(key)
     if mesh is None:
         from ..mesh import build_mesh
@@ -130,6 +147,56 @@ def source_mesh(view: View, **mesh_options):
         mesh = build_mesh(view, **mesh_options)
         src.meshes[key] = mesh
     return mesh
+
+
+#: Levels of detail from the camera move are cached on a grid of baselines 2^(k/2) (scene
+#: units): a call reuses the mesh of the next larger level, at most sqrt(2) finer than needed.
+_LOD_STEPS_PER_OCTAVE = 2
+#: The move-derived baseline never drops below this share of the source's median depth (issue
+#: 4's fixed default). A smaller move would allow coarser planes for the image, but the output
+#: depth would then drift by more than the 2 % under which the blend sees one surface (room,
+#: t = 0.5 at the move's 0.12: 99th-percentile depth error 2.1 %, -0.14 dB), and a pure
+#: rotation has no parallax at all.
+_MIN_BASELINE_FRACTION = 0.05
+
+
+def _mesh_key(mesh_options: dict) -> tuple:
+    return tuple(sorted(mesh_options.items()))
+
+
+def lod_baseline(view: View, cameras) -> float:
+    """The baseline (scene units) for the error bound of ``view``'s mesh when it is rendered
+    into ``cameras``: the largest distance from the source camera centre to a target centre
+    (for an interpolation, the span of the frames on the source's side), rounded up to the
+    level grid (``2^(k/2)``) so that nearby calls share one cached mesh, and at least 5 % of
+    the median depth (issue 4's default; see :data:`_MIN_BASELINE_FRACTION`). Parallax is ``f * b / z`` pixels for a move ``b``, so a mesh whose planes
+    are within ``max_error_px / (f b)`` in 1/z is within ``max_error_px`` in every target."""
+    from ..mesh.segment import _median_depth
+
+    c = view.camera.position
+    b = max(float(np.linalg.norm(cam.position - c)) for cam in cameras)
+    floor = _MIN_BASELINE_FRACTION * _median_depth(view.depth)
+    if not b > floor:
+        return floor
+    k = np.ceil(_LOD_STEPS_PER_OCTAVE * np.log2(b))
+    return float(2.0 ** (k / _LOD_STEPS_PER_OCTAVE))
+
+
+def _lod_options(view: View, cameras, mesh_options: dict, lod: str) -> dict:
+    """``mesh_options`` plus the move-derived baseline, unless the caller fixed the level of
+    detail (``threshold`` or ``baseline``) or asked for the old default (``lod="depth"``)."""
+    if lod == "depth" or "threshold" in mesh_options or "baseline" in mesh_options:
+        return mesh_options
+    b = lod_baseline(view, cameras)
+    if b == _MIN_BASELINE_FRACTION * _median_depth_of(view):  # the default mesh (same cache key)
+        return mesh_options
+    return {**mesh_options, "baseline": b}
+
+
+def _median_depth_of(view: View) -> float:
+    from ..mesh.segment import _median_depth
+
+    return _median_depth(view.depth)
 
 
 def _check_source(view, name: str) -> None:
@@ -154,24 +221,32 @@ def _maps(view: View, camera: Camera, method: str, footprint: str, splat: str, m
 
 
 def _render(views, camera, weights, *, method, footprint, splat, mesh_options, interpolation, composite_mode,
-            depth_tol, dtype):
-    """Render one or two sources into ``camera`` and composite them (output arrays are fresh)."""
-    maps = [_maps(v, camera, method, footprint, splat, mesh_options, slot) for v, slot in zip(views, "ab")]
+            depth_tol, dtype, silhouettes=False):
+    """Render one or two sources into ``camera`` and composite them (output arrays are fresh).
+    ``mesh_options``: one dict per view. ``silhouettes``: mixed silhouette pixels of each
+    source get low trust where the two layers agree (:func:`~ibr.render.composite.source_trust`)."""
+    maps = [_maps(v, camera, method, footprint, splat, o, slot) for v, o, slot in zip(views, mesh_options, "ab")]
     if not any(m.coverage.any() for m in maps):
         return None
+    trust = None
+    if silhouettes and len(views) == 2:
+        trust = [_source(v).trust(_mesh_key(o) if method == "mesh" else None) for v, o in zip(views, mesh_options)]
     if interpolation == "linear":  # fused numba pass (no layer images, no OpenCV thread pool)
         raw = [_source(v).raw for v in views]
-        return sample_composite(raw, maps, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype)
+        return sample_composite(raw, maps, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype,
+                                trust=trust)
     colors = [_source(v).color for v in views]
     layers = []
     for m, c, slot in zip(maps, colors, "ab"):
         buf = scratch((slot, "color"), (*camera.shape, c.shape[2]), np.float32)
         layers.append(Layer(sample_maps(c, m.map_u, m.map_v, interpolation=interpolation, out=buf), m.depth,
                             m.coverage))
-    return composite(layers, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype)
+    if trust is not None:
+        trust = [sample_maps(t[..., None], m.map_u, m.map_v)[..., 0] for t, m in zip(trust, maps)]
+    return composite(layers, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype, trust=trust)
 
 
-def _finish(comp, camera, t, fill, previous, out_2d) -> Rendering:
+def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
     holes = ~comp.coverage
     color, depth = comp.color, comp.depth
     filled = np.zeros_like(holes)
@@ -180,7 +255,9 @@ def _finish(comp, camera, t, fill, previous, out_2d) -> Rendering:
             color[holes] = previous.color.reshape(color.shape)[holes]
             depth[holes] = previous.depth[holes]
             filled = holes.copy()
-        elif fill in ("previous", "inpaint"):
+        elif fill in ("previous", "inpaint"):  # streak-free background pull-push
+            filled = _fill_pullpush_inplace(color, depth, holes, axis=axis)
+        elif fill == "background":  # the directional fill of issue 4 (rows and columns)
             filled = _fill_background_inplace(color, depth, holes)
     if out_2d:
         color = color[..., 0]
@@ -214,6 +291,7 @@ def warp(
     interpolation: str = "linear",
     splat: str = "inverse",
     mesh_options: dict | None = None,
+    lod: str = "move",
 ) -> Rendering:
     """Render one RGB-D view from another camera.
 
@@ -226,9 +304,11 @@ def warp(
         depth (e.g. the Middlebury right image) is a valid target.
     method : {"mesh", "forward"}
         Quad-mesh inverse warp (default, exact on planes) or per-pixel forward splat (preview).
-    fill : {"inpaint", "none", "previous"}
-        Hole filling: depth-aware background fill (default) or none. ``"previous"`` has no
-        previous frame here and behaves like ``"inpaint"``.
+    fill : {"inpaint", "background", "none", "previous"}
+        Hole filling: streak-free background pull-push (default,
+        :func:`ibr.render.fill.fill_pullpush`), the directional background fill of rows and
+        columns (``"background"``), or none. ``"previous"`` has no previous frame here and
+        behaves like ``"inpaint"``.
     footprint : {"free", "surface", "quad"}
         Sample-footprint clamping of the mesh renderer (:func:`ibr.render.rasterize_mesh`).
     interpolation : {"linear", "cubic"}
@@ -236,7 +316,12 @@ def warp(
     splat : {"inverse", "nearest"}
         Splat mode of ``method="forward"`` (:func:`ibr.render.forward.forward_warp`).
     mesh_options : dict, optional
-        Options of :func:`ibr.build_mesh` (level of detail); the mesh is cached per view.
+        Options of :func:`ibr.build_mesh` (level of detail, ``quantization``); the mesh is
+        cached per view and option set.
+    lod : {"move", "depth"}
+        Where the error bound's baseline comes from when ``mesh_options`` fixes neither
+        ``baseline`` nor ``threshold``: the actual move from the source to ``camera``
+        (default, :func:`lod_baseline`), or 5 % of the median depth (issue 4's default).
 
     Returns
     -------
@@ -252,14 +337,16 @@ def warp(
     check_choice("fill", fill, FILLS)
     check_choice("footprint", footprint, FOOTPRINTS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)
+    check_choice("lod", lod, LODS)
     _check_source(view, "view")
     camera = _check_target(camera)
+    opts = _lod_options(view, [camera], dict(mesh_options or {}), lod) if method == "mesh" else {}
     comp = _render([view], camera, [1.0], method=method, footprint=footprint, splat=splat,
-                   mesh_options=dict(mesh_options or {}), interpolation=interpolation, composite_mode="blend",
+                   mesh_options=[opts], interpolation=interpolation, composite_mode="blend",
                    depth_tol=0.02, dtype=view.color.dtype)
     if comp is None:
         raise _nothing_seen(camera, [view.name], None)
-    return _finish(comp, camera, None, fill, None, view.color.ndim == 2)
+    return _finish(comp, camera, None, fill, None, view.color.ndim == 2, parallax_axis(camera, [view.camera]))
 
 
 def _targets(view_a: View, view_b: View, t) -> tuple[list[Camera], list[float | None], bool]:
@@ -294,6 +381,8 @@ def iter_interpolate(
     interpolation: str = "linear",
     splat: str = "inverse",
     mesh_options: dict | None = None,
+    lod: str = "move",
+    silhouettes: bool = True,
 ) -> Iterator[Rendering]:
     """Generator form of :func:`interpolate`: yields one :class:`Rendering` per target, in order
     (the previous-frame fill uses the frame yielded before)."""
@@ -302,6 +391,7 @@ def iter_interpolate(
     check_choice("fill", fill, FILLS)
     check_choice("footprint", footprint, FOOTPRINTS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)
+    check_choice("lod", lod, LODS)
     depth_tol = check_positive("depth_tol", depth_tol)
     _check_source(view_a, "view_a")
     _check_source(view_b, "view_b")
@@ -316,16 +406,19 @@ def iter_interpolate(
             f"{view_a.color.dtype} {view_a.color.shape}; convert both to one dtype and layout"
         )
     cams, ts, _ = _targets(view_a, view_b, t)
-    opts = dict(mesh_options or {})
+    base = dict(mesh_options or {})
+    # level of detail from the span of the whole call (one mesh per source for every frame)
+    opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
     previous = None
     for cam, tv in zip(cams, ts):
         w = viewpoint_weights(cam, [view_a.camera, view_b.camera])
         comp = _render([view_a, view_b], cam, w, method=method, footprint=footprint, splat=splat, mesh_options=opts,
                        interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
-                       dtype=view_a.color.dtype)
+                       dtype=view_a.color.dtype, silhouettes=silhouettes)
         if comp is None:
             raise _nothing_seen(cam, [view_a.name, view_b.name], tv)
-        previous = _finish(comp, cam, tv, fill, previous, view_a.color.ndim == 2)
+        previous = _finish(comp, cam, tv, fill, previous, view_a.color.ndim == 2,
+                           parallax_axis(cam, [view_a.camera, view_b.camera]))
         yield previous
 
 
@@ -342,6 +435,8 @@ def interpolate(
     interpolation: str = "linear",
     splat: str = "inverse",
     mesh_options: dict | None = None,
+    lod: str = "move",
+    silhouettes: bool = True,
 ) -> "Rendering | list[Rendering]":
     """Views between two RGB-D sources (seed 002: inverse warping + two-source hole filling).
 
@@ -359,15 +454,20 @@ def interpolate(
     composite_mode : {"blend", "front"}
         Depth-aware blend of the two layers (default) or the seed's order (the source nearer to
         the new viewpoint in front, the other fills its holes).
-    fill : {"previous", "inpaint", "none"}
+    fill : {"previous", "inpaint", "background", "none"}
         Holes left after compositing: the previous output frame (default; seed step 7; the first
-        frame, having none, gets the background fill), the depth-aware background fill for
-        every frame, or nothing.
+        frame, having none, gets the background pull-push), the background pull-push for every
+        frame (``"inpaint"``), issue 4's directional background fill, or nothing.
     depth_tol : float
         Relative depth tolerance under which both layers see the same surface.
-    footprint, interpolation, splat, mesh_options
-        See :func:`warp`. Meshes are built once per source view and reused for every frame
-        (and by later calls with the same view objects).
+    footprint, interpolation, splat, mesh_options, lod
+        See :func:`warp`. Meshes are built once per source view and level of detail and reused
+        for every frame (and by later calls with the same view objects); with ``lod="move"``
+        the baseline is the largest distance from each source to the frames of the call.
+    silhouettes : bool
+        Give the mixed pixels on both sides of every depth discontinuity of a source low weight
+        where both sources see the same surface (default), so the clean pixel of the other
+        source wins (no ghost outlines); ``False`` is issue 4's plain viewpoint blend.
 
     Returns
     -------
@@ -389,7 +489,8 @@ def interpolate(
     frames = list(
         iter_interpolate(
             view_a, view_b, t, method=method, composite_mode=composite_mode, fill=fill, depth_tol=depth_tol,
-            footprint=footprint, interpolation=interpolation, splat=splat, mesh_options=mesh_options,
+            footprint=footprint, interpolation=interpolation, splat=splat, mesh_options=mesh_options, lod=lod,
+            silhouettes=silhouettes,
         )
     )
     single = isinstance(t, (Camera, View)) or np.ndim(t) == 0
