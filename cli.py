@@ -25,6 +25,7 @@ COMMANDS = [
     ("stitch", "stitch"),
     ("canvas", "canvas"),
     ("batch", "batch"),
+    ("stitch-photos", "stitch_photos"),
 ]
 
 

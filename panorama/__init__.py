@@ -9,6 +9,7 @@ latitude positive up = -y; faces +x -x +y -y +z -z with +y the floor) and
 from .convert import cubemap_to_equirect, detect_layout, equirect_to_cubemap, perspective
 from .directions import FACE_FILE_NAMES, FACE_NAMES, WORLD_FROM_FACE, world_from_view
 from .layouts import LAYOUTS, pack_faces, unpack_faces
+from .photo import stitch_photos
 
 __all__ = [
     "FACE_FILE_NAMES",
@@ -20,6 +21,7 @@ __all__ = [
     "equirect_to_cubemap",
     "pack_faces",
     "perspective",
+    "stitch_photos",
     "unpack_faces",
     "world_from_view",
 ]

@@ -1,0 +1,232 @@
+"""panorama.photo: photos cut out of a known equirect at known rotations, stitched back (#16).
+
+Truth: :func:`panorama.photo.testdata.photo_sphere` (six scikit-image photos as cube faces) and
+:func:`~panorama.photo.testdata.cut_photos` (exact perspective cut-outs with exposure gains and
+noise). The stitched equirect is compared with the source reduced to the output width.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+import panorama
+from ibr.base.camera import Camera
+from panorama.directions import world_from_view
+from panorama.photo import compose_equirect, coverage_extent, stitch_photos
+from panorama.photo.compose import _footprint
+from panorama.photo.estimate import yaw_pitch_roll
+from panorama.photo.features import rotation_misfit
+from panorama.photo.testdata import (cut_photos, photo_sphere, psnr, ring_poses, rotation_errors_deg,
+                                     seam_band)
+
+W_OUT = 1536          # output equirect width for the 400 x 300 photos (native 2 pi f = 1638)
+PHOTO = dict(width=400, height=300, hfov_deg=75.0)
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return photo_sphere(2048)
+
+
+@pytest.fixture(scope="module")
+def reference(sphere):
+    return cv2.resize(sphere, (W_OUT, W_OUT // 2), interpolation=cv2.INTER_AREA)
+
+
+@pytest.fixture(scope="module")
+def photos(sphere):
+    # 12 photos: 8 around the horizon, 4 tilted up 40 deg; gains 0.9..1.1 (photo 0 at 1), noise 1/255
+    return cut_photos(sphere, ring_poses(((0.0, 8), (40.0, 4))), **PHOTO, gain_spread=0.1,
+                      noise=1 / 255, seed=3)
+
+
+@pytest.fixture(scope="module")
+def stitched(photos):
+    return stitch_photos(photos.images, width=W_OUT, exposure_reference=0)
+
+
+def _errors(img, ref, cov, band):
+    x = img.astype(np.float32) / 255.0
+    rms = lambda m: float(np.sqrt(np.mean((x - ref)[m] ** 2)))  # noqa: E731
+    return psnr(x, ref, cov), rms(cov & ~band), rms(cov & band)
+
+
+# ----------------------------------------------------------------------------- the pipeline
+def test_rotations_focal_and_placement(stitched, photos):
+    assert stitched.report.used == list(range(12))
+    err = rotation_errors_deg(stitched.cameras, photos.cameras)
+    # no global alignment: wave correction levels the horizon and photo 0 is put at lon 0
+    assert err.max() < 0.2, err
+    f_true = photos.cameras[0].fx
+    for cam in stitched.cameras:
+        assert abs(cam.fx / f_true - 1) < 0.005
+        assert (cam.cx, cam.cy) == (199.5, 149.5)
+    yaw, pitch, _ = yaw_pitch_roll(stitched.cameras[9].world_from_cam[:3, :3])
+    assert abs(yaw - 135.0) < 0.2 and abs(pitch - 40.0) < 0.2  # ring 2 is turned by 45 deg
+
+
+def test_stitched_equirect_matches_the_source(stitched, photos, reference):
+    band = seam_band(photos.cameras, W_OUT, px=8)
+    p, interior, seams = _errors(stitched.image, reference, stitched.coverage, band)
+    assert p >= 30.0
+    assert seams <= 2 * interior, (seams, interior)
+    # the uncovered part is marked: coverage is exactly where some photo looks (up to a pixel)
+    from panorama.photo.testdata import footprint_masks
+    union = np.any(footprint_masks(photos.cameras, W_OUT), axis=0)
+    assert np.mean(union != stitched.coverage) < 0.002
+    assert np.all(stitched.image[~stitched.coverage] == 0)
+    assert stitched.report.lat_range_deg[1] > 60 and stitched.report.lon_range_deg == (-180.0, 180.0)
+
+
+def test_known_pose_path_and_masks(photos, reference):
+    band = seam_band(photos.cameras, W_OUT, px=8)
+    out = compose_equirect(photos.images, photos.cameras, W_OUT, exposure_reference=0)
+    p, interior, seams = _errors(out.image, reference, out.coverage, band)
+    assert p >= 38.0 and seams <= 2 * interior
+    # exposure: the applied gains undo the ones the photos were given (within 3 %)
+    np.testing.assert_allclose(out.gains[:, 0] * photos.gains, 1.0, atol=0.03)
+    # a masked-out region never reaches the panorama: paint it magenta and mask it
+    imgs = [im.copy() for im in photos.images]
+    masks = [None] * len(imgs)
+    imgs[2][100:200, 150:250] = (255, 0, 255)
+    masks[2] = np.ones(imgs[2].shape[:2], bool)
+    masks[2][95:205, 145:255] = False
+    masked = compose_equirect(imgs, photos.cameras, W_OUT, masks=masks, exposure_reference=0)
+    assert psnr(masked.image.astype(np.float32) / 255, reference, masked.coverage) >= p - 0.5
+    # an alpha channel is a mask too
+    alpha = np.dstack([imgs[2], np.where(masks[2], 255, 0).astype(np.uint8)])
+    with_alpha = compose_equirect(imgs[:2] + [alpha] + imgs[3:], photos.cameras, W_OUT, exposure_reference=0)
+    assert np.array_equal(with_alpha.image, masked.image)
+
+
+def test_known_pose_ceiling_and_float_input(sphere, reference):
+    # ceiling: clean photos (no noise, no gain), true poses -> only the two resamplings are left
+    clean = cut_photos(sphere, ring_poses(((0.0, 8), (40.0, 4))), **PHOTO, gains=np.ones(12), noise=0.0)
+    out = compose_equirect([im.astype(np.float32) / 255 for im in clean.images], clean.cameras, W_OUT,
+                           exposure="none")
+    assert out.image.dtype == np.float32
+    assert psnr(out.image, reference, out.coverage) >= 39.5
+
+
+def test_longitude_wrap_is_seam_free(photos):
+    # the same photos turned 180 deg about up: photo 0 now straddles lon +-180, where the
+    # unrolled canvas must blend it as anywhere else -> the same panorama, rolled by W/2
+    turn = np.eye(4)
+    turn[:3, :3] = world_from_view(180.0, 0.0, 0.0)
+    turned = [c.with_pose(turn @ c.world_from_cam) for c in photos.cameras]
+    a = compose_equirect(photos.images, photos.cameras, W_OUT, exposure_reference=0, seam="voronoi")
+    b = compose_equirect(photos.images, turned, W_OUT, exposure_reference=0, seam="voronoi")
+    rolled = np.roll(b.image, W_OUT // 2, axis=1)
+    assert np.array_equal(np.roll(b.coverage, W_OUT // 2, axis=1), a.coverage)
+    assert psnr(rolled.astype(np.float32), a.image.astype(np.float32), a.coverage, peak=255.0) >= 45.0
+
+
+def test_single_photo_with_known_focal_and_pole(sphere):
+    # a photo straight up holds the north pole: it spans every column of the equirect
+    cam = Camera.from_fov(320, 240, hfov_deg=90.0, world_from_cam=np.eye(4))
+    pose = np.eye(4)
+    pose[:3, :3] = world_from_view(0.0, 90.0, 0.0)
+    up = cam.with_pose(pose)
+    u0, span, r0, r1, whole = _footprint(up, 512, 256)
+    assert whole and span == 512 and r0 == 0 and 0 < r1 < 128
+    shot = cut_photos(sphere, [(0.0, 90.0)], width=320, height=240, hfov_deg=90.0)
+    known = compose_equirect(shot.images, shot.cameras, 512)
+    assert known.coverage[0].all() and not known.coverage[-1].any()
+    ref = cv2.resize(sphere, (512, 256), interpolation=cv2.INTER_AREA)
+    assert psnr(known.image.astype(np.float32) / 255, ref, known.coverage) >= 30.0
+    # one photo and its focal length: nothing tells where up is, so it is placed at lon 0, lat 0
+    res = stitch_photos(shot.images, width=512, focal_px=shot.cameras[0].fx)
+    assert res.report.used == [0] and res.coverage[128, 256] and not res.coverage[0].any()
+
+
+# ----------------------------------------------------------------------------- the report
+def test_report_names_duplicate_other_scene_and_little_overlap(sphere):
+    import skimage.data
+
+    # yaw 0, 45, 90 overlap by 30 deg; the 4th photo at 90 + 71.7 shares a 3.3 deg strip
+    ps = cut_photos(sphere, [(0.0, 0.0), (45.0, 0.0), (90.0, 0.0), (161.7, 0.0)], width=480, height=360,
+                    hfov_deg=75.0, gain_spread=0.1, noise=1 / 255, seed=1)
+    dup = np.clip(ps.images[1].astype(int) + np.random.default_rng(5).integers(-2, 3, ps.images[1].shape),
+                  0, 255).astype(np.uint8)
+    other = cv2.resize(skimage.data.rocket(), (480, 360), interpolation=cv2.INTER_AREA)
+    res = stitch_photos(ps.images + [dup, other], width=512,
+                        names=["a", "b", "c", "sliver", "b again", "rocket"])
+    assert res.report.used == [0, 1, 2]
+    assert res.report.dropped == {3: "little_overlap", 4: "duplicate", 5: "no_match"}
+    assert res.cameras[3] is None and res.cameras[4] is None
+    table = res.report.table()
+    for word in ("DROPPED (little_overlap)", "DROPPED (duplicate)", "same view as photo 1", "another scene"):
+        assert word in table
+
+
+def test_zero_usable_photos_is_a_clear_error(sphere):
+    import skimage.data
+
+    with pytest.raises(ValueError, match="images: expected at least one photo"):
+        stitch_photos([])
+    unrelated = [cv2.resize(skimage.data.rocket(), (320, 240)), cv2.resize(skimage.data.chelsea(), (320, 240))]
+    with pytest.raises(ValueError, match="no two of the 2 photos could be stitched") as exc:
+        stitch_photos(unrelated, width=256)
+    assert "no_match" in str(exc.value)
+    with pytest.raises(ValueError, match="detector"):
+        stitch_photos(unrelated, detector="surf")
+    with pytest.raises(ValueError, match="width"):
+        stitch_photos(unrelated, width=101)
+
+
+# ----------------------------------------------------------------------------- helpers
+def test_helpers_exact_values():
+    r = world_from_view(30.0, -20.0, 5.0)
+    np.testing.assert_allclose(yaw_pitch_roll(r), (30.0, -20.0, 5.0), atol=1e-12)
+    # a pure camera rotation as OpenCV's centred homography has misfit 0
+    f = 300.0
+    k = np.diag([f, f, 1.0])
+    rel = world_from_view(40.0, 0.0, 0.0).T @ world_from_view(0.0, 0.0, 0.0)
+    assert rotation_misfit(k @ rel @ np.linalg.inv(k) * 3.7, f, f) < 1e-12
+    assert rotation_misfit(np.diag([1.0, 1.0, -1.0]), f, f) == math.inf
+    cov = np.zeros((4, 8), bool)
+    cov[1, [7, 0, 1]] = True  # wraps across lon 180
+    (lo, hi), (la, lb) = coverage_extent(cov)
+    assert (lo, hi) == (157.5, 247.5) and (la, lb) == (22.5, 22.5)
+
+
+# ----------------------------------------------------------------------------- command line
+def test_cli_writes_outputs_and_nothing_on_failure(tmp_path, photos, capsys):
+    import skimage.data
+
+    from cli import main
+    from ibr.io import read_image, write_image
+
+    paths = []
+    for k in (0, 1, 2, 8):
+        p = tmp_path / f"p{k}.png"
+        write_image(p, photos.images[k])
+        paths.append(str(p))
+    out, faces, rep = tmp_path / "pano.jpg", tmp_path / "faces", tmp_path / "rep.json"
+    assert main(["stitch-photos", *paths, "-o", str(out), "--width", "1024", "--cube", str(faces),
+                 "--report", str(rep), "--keep-exposure-of", "0"]) == 0
+    table = capsys.readouterr().out
+    assert "4 of 4 photos used" in table
+    pano = read_image(out)
+    assert pano.shape == (512, 1024, 3) and pano.dtype == np.uint8
+    assert sorted(x.name for x in faces.iterdir()) == [f"{n}.jpg" for n in ("nx", "ny", "nz", "px", "py", "pz")]
+    doc = json.loads(rep.read_text())
+    assert [p["used"] for p in doc["photos"]] == [True] * 4 and doc["photos"][0]["camera"]["width"] == 400
+    # ibr view works on the result
+    assert main(["view", str(out), "--yaw", "20", "-o", str(tmp_path / "v.png"), "--width", "64",
+                 "--height", "48"]) == 0
+    # failure: nothing written, an existing output untouched
+    other = tmp_path / "rocket.png"
+    write_image(other, cv2.resize(skimage.data.rocket(), (320, 240)))
+    before = out.read_bytes()
+    assert main(["stitch-photos", str(other), paths[0], "-o", str(out), "--cube", str(tmp_path / "f2")]) == 1
+    assert out.read_bytes() == before and not (tmp_path / "f2").exists()
+    # an output on an input is refused before any work
+    assert main(["stitch-photos", *paths, "-o", paths[0]]) == 1
+    assert "refusing to overwrite an input" in capsys.readouterr().err
+    assert read_image(paths[0]).shape == (300, 400, 3)
