@@ -40,11 +40,13 @@ VIEW_VERSION = 1
 
 #: Depth encodings of a view file: required and optional parameters of each.
 #: ``scale`` (optional everywhere except the fixed-point codes) multiplies the stored values;
-#: it is required for integer files such as 16-bit PNG. See :mod:`ibr.base.depth` for the formulas.
+#: it is required for integer files such as 16-bit PNG. ``step`` (z, range, disparity): stored units
+#: per quantization code (integer files default to 1; see ``ibr.base.depth.DepthQuantization``).
+#: See :mod:`ibr.base.depth` for the formulas.
 DEPTH_ENCODINGS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "z": ((), ("scale",)),
-    "range": ((), ("scale",)),
-    "disparity": (("baseline", "focal_px", "doffs"), ("scale",)),
+    "z": ((), ("scale", "step")),
+    "range": ((), ("scale", "step")),
+    "disparity": (("baseline", "focal_px", "doffs"), ("scale", "step")),
     "window": (("near", "far"), ()),
     "reversed": (("near", "far"), ()),
     "zprime": (("near", "far"), ()),
@@ -98,7 +100,7 @@ def _check_depth_params(encoding, params: dict, where: str) -> dict:
             raise ValueError(f"{where}: need 0 < near < far, got near={out['near']}, far={out['far']}")
         if encoding in _FIXED_BITS and math.isinf(out["far"]):
             raise ValueError(f"{where}: encoding {encoding!r} needs a finite far plane")
-    for k in ("baseline", "focal_px", "scale"):
+    for k in ("baseline", "focal_px", "scale", "step"):
         if k in out and not out[k] > 0:
             raise ValueError(f"{where}: parameter {k!r} must be positive, got {out[k]}")
     return out
@@ -246,9 +248,13 @@ def load_view(path) -> View:
                              f"{color_path.name} is {color.shape[1]}x{color.shape[0]}")
         z = _depth.sanitize_depth(_decode_depth(stored, encoding, p, camera))[0]
     try:
-        return View(color, z, camera, name)
+        view = View(color, z, camera, name)
     except (TypeError, ValueError) as exc:  # e.g. depths outside DEPTH_RANGE: name the file (#12)
         raise type(exc)(f"{where}: {exc}") from None
+    if z is not None:  # the encoding's quantization step ('step' stored units per code), for build_mesh (#11)
+        _depth.set_quantization(view, _depth.DepthQuantization.from_encoding(
+            encoding, p, integer=depth_path.suffix.lower() == ".png"))
+    return view
 
 
 def load_camera(path, *, what: str = "camera file") -> Camera:
