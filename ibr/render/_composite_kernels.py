@@ -22,10 +22,13 @@ def _store(out, v, u, ch, x, is_int, maxval):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _trust_weights(wa, wb, ka, kb):
-    """Blend weights of two agreeing layers scaled by their trust (1 clean, ~0 a mixed silhouette
-    pixel); a small floor keeps the viewpoint weights when both are mixed."""
-    xa = wa * (ka + 1e-3)
-    xb = wb * (kb + 1e-3)
+    """Blend weights of two agreeing layers scaled by the fourth power of their trust (1 clean,
+    ~0 a mixed silhouette pixel, bilinear in between); a small floor keeps the viewpoint weights
+    when both are mixed."""
+    ka = ka * ka
+    kb = kb * kb
+    xa = wa * (ka * ka + 1e-3)  # trust^4: a sample half on a mixed pixel is half contaminated,
+    xb = wb * (kb * kb + 1e-3)  # so it should lose clearly, not by a factor of two
     s = xa + xb
     return xa / s, xb / s
 

@@ -258,9 +258,10 @@ def _up_taps(x, n):
 @njit(cache=True, error_model="numpy")
 def pp_push(sums, coarse_val, eps, need, out_val):
     """Push step: ``val = (S + e up(V)) / (W + e)`` with ``e = eps * up(W_coarse) / 4``; the
-    coarse level's mean values V (last channel: its weight sum) are upsampled bilinearly
-    (half-pixel centres). Where a fine cell has little (foreground) weight, the coarser,
-    background-dominated value takes over. Only cells flagged in ``need`` are computed."""
+    coarse level's mean values V (last channel: the weight behind each value, its own sum plus
+    what it took from coarser levels) are upsampled bilinearly (half-pixel centres). Where a
+    fine cell has little (foreground) weight, the coarser, background-dominated value takes
+    over, and it keeps that weight on the way down. Only cells flagged in ``need`` are computed."""
     h, w, n = sums.shape
     hc, wc = coarse_val.shape[0], coarse_val.shape[1]
     nv = n - 1
@@ -280,7 +281,7 @@ def pp_push(sums, coarse_val, eps, need, out_val):
                     out_val[v, u, k] = (sums[v, u, k] + e * up) / den
                 else:
                     out_val[v, u, k] = up
-            out_val[v, u, nv] = sums[v, u, nv]
+            out_val[v, u, nv] = den  # the value's weight: own + what the coarser levels carry
 
 
 @njit(cache=True, error_model="numpy")

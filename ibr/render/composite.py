@@ -51,12 +51,13 @@ class Composite:
 def _steps(q: np.ndarray, axis: int, rel: float, ratio: float) -> np.ndarray:
     """Depth discontinuities between neighbours along ``axis`` of inverse depth ``q`` (NaN
     invalid): a valid/invalid pair, or ``|dq| > rel * min(q)`` and ``> ratio`` times the
-    larger of the two neighbouring differences on the line (a step, not a steep plane)."""
+    smaller of the two neighbouring differences on the line (a step, not a steep plane; the
+    smaller, so that both edges of a one-pixel-wide object count)."""
     d = np.diff(q, axis=axis)
     ad = np.abs(d)
     pad = [(0, 0), (0, 0)]
     pad[axis] = (1, 1)
-    p = np.pad(np.nan_to_num(ad, nan=0.0), pad)
+    p = np.pad(np.where(np.isnan(ad), np.inf, ad), pad, constant_values=np.inf)  # missing: no evidence
     sl = [slice(None), slice(None)]
     sl[axis] = slice(None, -2)
     left = p[tuple(sl)]
@@ -65,7 +66,7 @@ def _steps(q: np.ndarray, axis: int, rel: float, ratio: float) -> np.ndarray:
     n = q.shape[axis]
     q0, q1 = np.take(q, np.arange(n - 1), axis=axis), np.take(q, np.arange(1, n), axis=axis)
     with np.errstate(invalid="ignore"):
-        step = (ad > rel * np.fmin(q0, q1)) & (ad > ratio * np.maximum(left, right))
+        step = (ad > rel * np.fmin(q0, q1)) & (ad > ratio * np.minimum(left, right))
     return step | (np.isnan(q0) != np.isnan(q1))
 
 

@@ -10,9 +10,10 @@
 * ``fill_pullpush`` (the single-frame default): a background-weighted pull-push pyramid. Each
   covered pixel enters with the weight ``(z / z_max)^power``, so wherever near and far surfaces
   meet in a pyramid cell the farther one (the background a disocclusion opens onto) dominates;
-  the push spreads those colours smoothly in 2-D (no row or column streaks), a 3x3
-  binomial at half resolution removes the pyramid's block structure, and 30 % of the background side *along the
-  parallax axis* (where a disocclusion's hidden background continues) restores detail.
+  the push spreads those colours smoothly in 2-D (no row or column streaks), a 3x3 binomial
+  at half resolution removes the pyramid's block structure, and 40 % of the background side
+  *along the parallax axis* (where a disocclusion's hidden background continues) restores
+  detail.
 * ``fill_background_rows``: the same rule along rows only, for horizontal-only parallax (stereo
   pairs, seed 003): each run of uncovered pixels takes the deeper of its two row neighbours.
 
@@ -37,8 +38,8 @@ FILLS = ("previous", "inpaint", "background", "none")
 
 #: Pull-push defaults (tuned on the Middlebury motorcycle's disocclusions, docs/edges.md).
 PULLPUSH_POWER = 32.0
-PULLPUSH_EPS = 0.05
-PULLPUSH_MIX = 0.3
+PULLPUSH_EPS = 0.002
+PULLPUSH_MIX = 0.4
 
 
 def _check(color, depth, holes):
@@ -148,10 +149,12 @@ def fill_pullpush(color, depth, holes, *, axis: int = 0, power: float = PULLPUSH
         along it, so the background continues along it.
     power : float
         Background preference: a covered pixel weighs ``(z / z_max)^power`` (32: a surface at
-        80 % of the farthest depth weighs 1e-3 of it); rounded to a power of two.
+        80 % of the farthest depth weighs 1e-3 of it); rounded to a power of two. The defaults
+        (power, eps, mix) were tuned on the Middlebury motorcycle's disocclusions (docs/edges.md).
     eps : float
         Push strength of the coarser (smoother, more background) level against a cell's own
-        weight: ``value = (S + e up) / (W + e)``, ``e = eps * up(W_coarse) / 4``.
+        weight: ``value = (S + e up) / (W + e)``, ``e = eps * up(W_coarse) / 4``, where
+        ``W_coarse`` is the weight behind the coarser value (its own plus what it inherited).
     smooth : bool
         Smooth the half-resolution level with a 3x3 binomial kernel before the last push
         (removes the pyramid's block structure).

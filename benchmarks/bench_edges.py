@@ -1,0 +1,282 @@
+"""Depth edges and holes on real data (issue 11): every figure of the issue, before -> after.
+
+Run from the repository root (``pip install -e ".[bench]"``)::
+
+    python benchmarks/bench_edges.py             # everything, incl. the slow classical inpainters
+    python benchmarks/bench_edges.py --quick     # no biharmonic / FSR, 5 repeats (also: ibr bench edges)
+
+"Before" is issue 4's behaviour, still reachable through options: ``silhouettes=False`` (plain
+viewpoint blend), ``fill="background"`` (directional fill of rows and columns), ``lod="depth"``
+(baseline 5 % of the median depth), meshes without ``quantization``.
+
+1. Bundled synthetic pairs (room, clutter), t = 0.25/0.5/0.75, covered pixels before filling:
+   PSNR in the edge band (within 1 px, 8-connected, of a ground-truth depth edge: neighbours whose
+   depths differ by more than 2 %), over all covered pixels, and the number of covered pixels off
+   the band with an error over 48/255 in some channel. The *ceilings* of the current layers:
+   per pixel the best of layer a, layer b and their blend (an oracle compositor), and 3x3
+   supersampling of the target (an oracle anti-aliasing of the same geometry).
+2. Middlebury motorcycle left -> right, the hole pixels (no source coverage) against the real
+   right image: our fills and cv2.inpaint (Telea, Navier-Stokes), skimage inpaint_biharmonic and
+   cv2.xphoto.inpaint (FSR fast), all on the same holes in the same run; fill time as the median
+   of per-repeat ratios to issue 4's fill timed back to back; covered-pixel PSNR before/after.
+   The ceiling of a smooth fill: the right image itself blurred (Gaussian sigma 2/4/8 px).
+3. Synthetic pairs re-encoded as 8-bit integer disparity (the pair's own baseline, like
+   Middlebury ground truth) and as 16-bit millimetre depth: quads and PSNR over covered pixels,
+   without and with the encoding's quantization.
+4. Time of the 512x512 two-source frame with cached meshes (issue target <= 8 ms), before and
+   after options, back to back.
+
+Writes ``benchmarks/results/edges_motorcycle_fill.png`` and ``edges_clutter_silhouette.png``
+(copied to ``docs/img/`` by a full run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import cv2  # noqa: E402
+from scipy import ndimage  # noqa: E402
+
+from benchmarks._timing import median_ms, paired_ms  # noqa: E402
+from ibr.base.depth import DepthQuantization  # noqa: E402
+from ibr.base.view import View  # noqa: E402
+from ibr.io import load_view  # noqa: E402
+from ibr.mesh import build_mesh  # noqa: E402
+from ibr.render.composite import viewpoint_weights  # noqa: E402
+from ibr.render.fill import fill_background, fill_pullpush, parallax_axis  # noqa: E402
+from ibr.render.rasterize import render_mesh  # noqa: E402
+from ibr.render.view_synthesis import interpolate, source_mesh, warp  # noqa: E402
+from samples import DATA_DIR  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results"
+DOCS = ROOT / "docs" / "img"
+TS = (0.25, 0.5, 0.75)
+BEFORE = dict(silhouettes=False, lod="depth")
+AFTER: dict = {}
+
+
+def psnr(a, b, mask=None) -> float:
+    d = (np.asarray(a, np.float64) - np.asarray(b, np.float64)) ** 2
+    d = d[mask] if mask is not None else d
+    return float(10 * np.log10(255.0**2 / max(d.mean(), 1e-12)))
+
+
+def edge_band(depth, rel=0.02) -> np.ndarray:
+    """Pixels within 1 px (8-connected) of a depth edge: 4-neighbours whose planar depths differ
+    by more than ``rel`` of the nearer one, or exactly one of which is valid."""
+    z = np.asarray(depth, np.float64)
+    e = np.zeros(z.shape, bool)
+    with np.errstate(invalid="ignore"):
+        dh = (np.abs(z[:, 1:] - z[:, :-1]) > rel * np.fmin(z[:, 1:], z[:, :-1])) | (np.isnan(z[:, 1:]) != np.isnan(z[:, :-1]))
+        dv = (np.abs(z[1:] - z[:-1]) > rel * np.fmin(z[1:], z[:-1])) | (np.isnan(z[1:]) != np.isnan(z[:-1]))
+    e[:, 1:] |= dh
+    e[:, :-1] |= dh
+    e[1:] |= dv
+    e[:-1] |= dv
+    return ndimage.binary_dilation(e, ndimage.generate_binary_structure(2, 2))
+
+
+def load_pair(name):
+    a, b = load_view(DATA_DIR / f"{name}_a.json"), load_view(DATA_DIR / f"{name}_b.json")
+    truths = [load_view(DATA_DIR / f"{name}_t{round(t * 100):03d}.json") for t in TS]
+    return a, b, truths
+
+
+def edge_scores(frames, truths):
+    band, cov_p, off = [], [], []
+    for r, g in zip(frames, truths):
+        bd, cov = edge_band(g.depth), ~r.holes
+        band.append(psnr(r.color, g.color, bd & cov))
+        cov_p.append(psnr(r.color, g.color, cov))
+        err = np.abs(r.color.astype(int) - g.color.astype(int)).max(-1)
+        off.append(int(((err > 48) & cov & ~bd).sum()))
+    return band, cov_p, off
+
+
+def ceilings(a, b, truths):
+    """Oracle compositor (per pixel best of a, b, blend) and 3x3 supersampled target, edge band."""
+    orc, ssaa = [], []
+    for g in truths:
+        la = render_mesh(source_mesh(a), a.color, g.camera)
+        lb = render_mesh(source_mesh(b), b.color, g.camera)
+        gt = g.color.astype(np.float64)
+        wa, wb = viewpoint_weights(g.camera, [a.camera, b.camera])
+        errs = [((la.color - gt) ** 2).mean(-1), ((lb.color - gt) ** 2).mean(-1),
+                ((wa * la.color + wb * lb.color - gt) ** 2).mean(-1)]
+        best = np.where(la.coverage, errs[0], np.inf)
+        best = np.where(lb.coverage, np.minimum(best, errs[1]), best)
+        both = la.coverage & lb.coverage
+        best = np.where(both, np.minimum(best, errs[2]), best)
+        m = edge_band(g.depth) & np.isfinite(best)
+        orc.append(float(10 * np.log10(255.0**2 / best[m].mean())))
+        k = 3
+        big = g.camera.resized(g.camera.width * k, g.camera.height * k)
+        r = interpolate(a, b, big, fill="inpaint")
+        c = r.color.astype(np.float64).reshape(g.camera.height, k, g.camera.width, k, -1).mean((1, 3))
+        ssaa.append(psnr(c, g.color, edge_band(g.depth)))
+    return orc, ssaa
+
+
+def section_edges(quick):
+    print("\n1. edge band (+-1 px of ground-truth depth edges), covered pixels, t = 0.25/0.5/0.75")
+    print(f"{'scene':<8} {'variant':<22} {'edge band dB':<24} {'mean':>6} {'all dB':>7} {'off-band > 48/255':>18}")
+    for name in ("clutter", "room"):
+        a, b, truths = load_pair(name)
+        cams = [g.camera for g in truths]
+        for label, kw in (("before (issue 4)", BEFORE), ("after", AFTER)):
+            frames = interpolate(a, b, cams, fill="none", **kw)
+            band, cov_p, off = edge_scores(frames, truths)
+            print(f"{name:<8} {label:<22} {' '.join(f'{x:.2f}' for x in band):<24} {np.mean(band):6.2f} "
+                  f"{np.mean(cov_p):7.2f} {str(off):>18}")
+        if not quick:
+            orc, ssaa = ceilings(a, b, truths)
+            print(f"{name:<8} {'ceiling: oracle pick':<22} {' '.join(f'{x:.2f}' for x in orc):<24} {np.mean(orc):6.2f}")
+            print(f"{name:<8} {'ceiling: 3x3 SSAA':<22} {' '.join(f'{x:.2f}' for x in ssaa):<24} {np.mean(ssaa):6.2f}")
+
+
+def section_motorcycle(repeats, classical):
+    from ibr.io.middlebury import motorcycle_views
+
+    left, right = motorcycle_views()
+    print("\n2. motorcycle left -> right: hole pixels against the real right image")
+    before = warp(View(left.color, left.depth, left.camera, "l0"), right.camera, fill="none", lod="depth")
+    r0 = warp(left, right.camera, fill="none")
+    holes = r0.holes
+    gt = right.color
+    axis = parallax_axis(right.camera, [left.camera])
+    print(f"holes {holes.mean():.1%}; covered PSNR before {psnr(before.color, gt, ~before.holes):.2f} dB "
+          f"(lod from depth), after {psnr(r0.color, gt, ~holes):.2f} dB (lod from the move)")
+    print("ceiling of a smooth fill (the right image blurred): "
+          + ", ".join(f"sigma {s}: {psnr(cv2.GaussianBlur(gt.astype(np.float32), (0, 0), s), gt, holes):.2f} dB"
+                      for s in (2, 4, 8)))
+    rows = []
+    old_c, _, _ = fill_background(r0.color, r0.depth, holes)
+    old_ms = median_ms(lambda: fill_background(r0.color, r0.depth, holes), repeats)
+    rows.append(("issue 4 fill (rows + columns)", psnr(old_c, gt, holes), old_ms, 1.0))
+    new_c, new_z, new_f = fill_pullpush(r0.color, r0.depth, holes, axis=axis)
+    assert new_f.sum() == holes.sum() and np.array_equal(new_c[~holes], r0.color[~holes])
+    ms, ratio = paired_ms(lambda: fill_pullpush(r0.color, r0.depth, holes, axis=axis),
+                          lambda: fill_background(r0.color, r0.depth, holes), repeats)
+    rows.append(("pull-push + parallax axis (new)", psnr(new_c, gt, holes), ms, ratio))
+    pp_c, _, _ = fill_pullpush(r0.color, r0.depth, holes, mix=0.0)
+    rows.append(("pull-push only (mix 0)", psnr(pp_c, gt, holes), float("nan"), float("nan")))
+    mask = holes.astype(np.uint8) * 255
+    bgr = np.ascontiguousarray(r0.color[..., ::-1])
+    for label, flag in (("cv2.inpaint Telea r=3", cv2.INPAINT_TELEA), ("cv2.inpaint Navier-Stokes r=3", cv2.INPAINT_NS)):
+        t0 = time.perf_counter()
+        out = cv2.inpaint(bgr, mask, 3, flag)[..., ::-1]
+        rows.append((label, psnr(out, gt, holes), (time.perf_counter() - t0) * 1e3, float("nan")))
+    if classical:
+        from skimage.restoration import inpaint_biharmonic
+
+        t0 = time.perf_counter()
+        out = inpaint_biharmonic(r0.color.astype(np.float64) / 255, holes, channel_axis=-1) * 255
+        rows.append(("skimage inpaint_biharmonic", psnr(out, gt, holes), (time.perf_counter() - t0) * 1e3,
+                     float("nan")))
+        dst = np.zeros_like(bgr)
+        t0 = time.perf_counter()
+        cv2.xphoto.inpaint(bgr, (~holes).astype(np.uint8) * 255, dst, cv2.xphoto.INPAINT_FSR_FAST)
+        rows.append(("cv2.xphoto.inpaint FSR fast", psnr(dst[..., ::-1], gt, holes), (time.perf_counter() - t0) * 1e3,
+                     float("nan")))
+    print(f"{'fill':<34} {'holes dB':>8} {'ms':>9} {'x issue-4 fill':>15}")
+    for label, p, ms, ratio in rows:
+        print(f"{label:<34} {p:8.2f} {ms:9.1f} {'' if not np.isfinite(ratio) else f'{ratio:.2f}':>15}")
+    return r0, old_c, new_c
+
+
+def section_quantized():
+    print("\n3. quantized re-encodings: quads of source a and PSNR over covered pixels (t = 0.25/0.5/0.75)")
+    print(f"{'scene':<8} {'encoding':<32} {'quads':>6} {'x exact':>8} {'PSNR dB':>8} {'vs exact':>9}")
+    for name in ("room", "clutter"):
+        a, b, truths = load_pair(name)
+        cams = [g.camera for g in truths]
+        base = float(np.linalg.norm(a.camera.position - b.camera.position))
+        f = a.camera.fx
+
+        def scores(va, vb, q):
+            opts = {} if q is None else {"quantization": q}
+            n = len(build_mesh(va, **opts))
+            frames = interpolate(va, vb, cams, fill="none", mesh_options=opts)
+            return n, float(np.mean([psnr(r.color, g.color, ~r.holes) for r, g in zip(frames, truths)]))
+
+        n0, p0 = scores(a, b, None)
+        print(f"{name:<8} {'exact float depth':<32} {n0:6d} {1.0:8.2f} {p0:8.2f} {0.0:9.2f}")
+        disp = [View(v.color, (base * f / np.rint(base * f / v.depth)).astype(np.float32), v.camera, v.name)
+                for v in (a, b)]
+        assert all(np.nanmax(base * f / v.depth) <= 255 for v in disp)
+        mm = [View(v.color, (np.rint(v.depth * 1000) / 1000).astype(np.float32), v.camera, v.name) for v in (a, b)]
+        for label, views, q in (("8-bit disparity, no quantization", disp, None),
+                                ("8-bit disparity, quantization", disp,
+                                 DepthQuantization.disparity(baseline=base, focal_px=f)),
+                                ("16-bit mm, no quantization", mm, None),
+                                ("16-bit mm, quantization", mm, DepthQuantization.codes(0.001))):
+            n, p = scores(*views, q)
+            print(f"{name:<8} {label:<32} {n:6d} {n / n0:8.2f} {p:8.2f} {p - p0:+9.2f}")
+
+
+def section_timing(repeats):
+    from bench_render import room_pair
+    from ibr.base.camera import interpolate_cameras
+
+    a, b = room_pair(512, 512)
+    cam = interpolate_cameras(a.camera, b.camera, 0.5)
+    for kw in (BEFORE, AFTER):
+        interpolate(a, b, cam, fill="none", **kw)
+    ms_after, ratio = paired_ms(lambda: interpolate(a, b, cam, fill="none", **AFTER),
+                                lambda: interpolate(a, b, cam, fill="none", **BEFORE), repeats)
+    ms_fill = median_ms(lambda: interpolate(a, b, cam, fill="inpaint"), repeats)
+    print(f"\n4. 512x512 two-source frame, cached meshes: {ms_after:.2f} ms (x{ratio:.2f} of the issue-4 options "
+          f"timed back to back; target 8 ms); with the pull-push fill {ms_fill:.2f} ms")
+
+
+def pictures(r0, old_c, new_c, out_dir: Path):
+    from ibr.io.middlebury import motorcycle_views
+
+    _, right = motorcycle_views()
+    y0, y1, x0, x1 = 130, 350, 380, 741
+    strip = [c[y0:y1, x0:x1] for c in (r0.color * (~r0.holes[..., None]), old_c, new_c, right.color)]
+    sheet = np.concatenate([np.concatenate(strip[:2], 1), np.concatenate(strip[2:], 1)], 0)
+    cv2.imwrite(str(out_dir / "edges_motorcycle_fill.png"), np.ascontiguousarray(sheet[..., ::-1]))
+    a, b, truths = load_pair("clutter")
+    g = truths[-1]
+    crops = [g.color]
+    for kw in (BEFORE, AFTER):
+        crops.append(interpolate(a, b, g.camera, fill="inpaint", **kw).color)
+    ys, xs = slice(30, 150), slice(180, 300)
+    row = np.concatenate([c[ys, xs] for c in crops], 1)
+    row = cv2.resize(row, None, fx=3, fy=3, interpolation=cv2.INTER_NEAREST)
+    cv2.imwrite(str(out_dir / "edges_clutter_silhouette.png"), np.ascontiguousarray(row[..., ::-1]))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="skip biharmonic/FSR and the ceilings, 5 repeats")
+    ap.add_argument("--repeats", type=int, default=21, help="timing repeats (median), default %(default)s")
+    args = ap.parse_args(argv)
+    repeats = 5 if args.quick else args.repeats
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    section_edges(args.quick)
+    r0, old_c, new_c = section_motorcycle(repeats, classical=not args.quick)
+    section_quantized()
+    section_timing(repeats)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    pictures(r0, old_c, new_c, RESULTS)
+    if not args.quick:
+        DOCS.mkdir(parents=True, exist_ok=True)
+        for n in ("edges_motorcycle_fill.png", "edges_clutter_silhouette.png"):
+            shutil.copyfile(RESULTS / n, DOCS / n)
+    print(f"\nwrote {RESULTS / 'edges_motorcycle_fill.png'}, {RESULTS / 'edges_clutter_silhouette.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
