@@ -195,30 +195,35 @@ def _bg_weight(z, izref, squarings):
     r = z * izref
     for _ in range(squarings):
         r = r * r
-    return max(r, 1e-30)
+    return max(r, np.float32(1e-30))
 
 
 @njit(cache=True, error_model="numpy")
 def pp_pull0(color, depth, holes, izref, squarings, coarse):
     """Level 0 -> 1 of the pull-push pyramid in one pass: every covered pixel with valid depth
     enters as ``(w c_0, .., w c_{C-1}, w z, w)`` with the background weight of :func:`_bg_weight`,
-    summed over 2x2 cells into ``coarse`` (last channel: the weight)."""
+    summed over 2x2 cells into ``coarse`` (last channel: the weight). Row pairs are swept in
+    order, so the weights are computed once per pixel in a contiguous scan."""
     h, w, nc = color.shape
     hc, wc = coarse.shape[0], coarse.shape[1]
+    wrow = np.empty(w, np.float32)
     for cv in range(hc):
         for cu in range(wc):
             for k in range(nc + 2):
                 coarse[cv, cu, k] = 0.0
         for v in range(2 * cv, min(2 * cv + 2, h)):
-            for u in range(w):
+            for u in range(w):  # weights of the row (branch-free for the compiler)
                 z = depth[v, u]
-                if holes[v, u] or not (z > 0.0):
+                ok = (not holes[v, u]) and z > 0.0
+                wrow[u] = _bg_weight(z, izref, squarings) if ok else np.float32(0.0)
+            for u in range(w):
+                wt = wrow[u]
+                if wt == 0.0:
                     continue
-                wt = _bg_weight(z, izref, squarings)
-                cu = u // 2
+                cu = u >> 1
                 for k in range(nc):
                     coarse[cv, cu, k] += wt * np.float32(color[v, u, k])
-                coarse[cv, cu, nc] += wt * z
+                coarse[cv, cu, nc] += wt * depth[v, u]
                 coarse[cv, cu, nc + 1] += wt
 
 
@@ -377,13 +382,21 @@ def pp_top(sums, out_val):
             out_val[v, u, n - 1] = wt
 
 
+# binomial [1 8 28 56 70 56 28 8 1] / 256 (sigma = sqrt(2) px) across the parallax axis
+_ACROSS = np.array([1.0, 8.0, 28.0, 56.0, 70.0, 56.0, 28.0, 8.0, 1.0], np.float32) / np.float32(256.0)
+
+
 @njit(cache=True, error_model="numpy")
-def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, is_int, filled):
+def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, across_rows, is_int, filled):
     """Last push step, fused with the write: every hole pixel takes the bilinear upsampling of
     level 1's values (it has no weight of its own), colour mixed as ``(1 - mix) * pushed + mix
-    * direct`` where the directional background fill exists; depth from the pull-push."""
+    * directional`` where the directional background fill exists. The directional part is
+    smoothed *across* the parallax axis (a 9-tap binomial over rows when ``across_rows``, i.e.
+    for row-wise fills; over columns otherwise; outside the holes it reads the image), so rows
+    copied from different neighbours do not show as streaks. Depth from the pull-push."""
     h, w, nc = color.shape
     hc, wc = coarse_val.shape[0], coarse_val.shape[1]
+    acc = np.empty(nc, np.float32)
     for v in range(h):
         cv, ov = _up_taps(v, hc)
         for u in range(w):
@@ -394,12 +407,30 @@ def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, is_int, f
                  + 0.1875 * coarse_val[ov, cu, nc] + 0.0625 * coarse_val[ov, ou, nc])
             if not (z > 0.0):
                 continue
-            d = direct_ok[v, u]
+            d = direct_ok[v, u] and mix > 0.0
+            if d:
+                for k in range(nc):
+                    acc[k] = 0.0
+                for t in range(9):
+                    if across_rows:
+                        vv = min(max(v + t - 4, 0), h - 1)
+                        uu = u
+                    else:
+                        vv = v
+                        uu = min(max(u + t - 4, 0), w - 1)
+                    inside = holes[vv, uu]
+                    if inside and not direct_ok[vv, uu]:
+                        vv = v  # no directional value there: use this pixel's
+                        uu = u
+                        inside = True
+                    for k in range(nc):
+                        x = direct[vv, uu, k] if inside else np.float32(color[vv, uu, k])
+                        acc[k] += _ACROSS[t] * x
             for k in range(nc):
                 x = (0.5625 * coarse_val[cv, cu, k] + 0.1875 * coarse_val[cv, ou, k]
                      + 0.1875 * coarse_val[ov, cu, k] + 0.0625 * coarse_val[ov, ou, k])
                 if d:
-                    x = (1.0 - mix) * x + mix * direct[v, u, k]
+                    x = (1.0 - mix) * x + mix * acc[k]
                 if is_int:
                     x = np.floor(x + 0.5)
                 color[v, u, k] = x
