@@ -202,29 +202,28 @@ def _bg_weight(z, izref, squarings):
 def pp_pull0(color, depth, holes, izref, squarings, coarse):
     """Level 0 -> 1 of the pull-push pyramid in one pass: every covered pixel with valid depth
     enters as ``(w c_0, .., w c_{C-1}, w z, w)`` with the background weight of :func:`_bg_weight`,
-    summed over 2x2 cells into ``coarse`` (last channel: the weight). Row pairs are swept in
-    order, so the weights are computed once per pixel in a contiguous scan."""
+    summed over 2x2 cells into ``coarse`` (last channel: the weight). One row-major sweep; three
+    channels (RGB) are unrolled."""
     h, w, nc = color.shape
-    hc, wc = coarse.shape[0], coarse.shape[1]
-    wrow = np.empty(w, np.float32)
-    for cv in range(hc):
-        for cu in range(wc):
-            for k in range(nc + 2):
-                coarse[cv, cu, k] = 0.0
-        for v in range(2 * cv, min(2 * cv + 2, h)):
-            for u in range(w):  # weights of the row (branch-free for the compiler)
-                z = depth[v, u]
-                ok = (not holes[v, u]) and z > 0.0
-                wrow[u] = _bg_weight(z, izref, squarings) if ok else np.float32(0.0)
-            for u in range(w):
-                wt = wrow[u]
-                if wt == 0.0:
-                    continue
-                cu = u >> 1
+    coarse[:] = 0.0
+    zero = np.float32(0.0)
+    for v in range(h):
+        cv = v >> 1
+        for u in range(w):
+            z = depth[v, u]
+            if holes[v, u] or not (z > 0.0):
+                continue
+            wt = _bg_weight(z, izref, squarings)
+            cu = u >> 1
+            if nc == 3:
+                coarse[cv, cu, 0] += wt * np.float32(color[v, u, 0])
+                coarse[cv, cu, 1] += wt * np.float32(color[v, u, 1])
+                coarse[cv, cu, 2] += wt * np.float32(color[v, u, 2])
+            else:
                 for k in range(nc):
-                    coarse[cv, cu, k] += wt * np.float32(color[v, u, k])
-                coarse[cv, cu, nc] += wt * depth[v, u]
-                coarse[cv, cu, nc + 1] += wt
+                    coarse[cv, cu, k] += wt * np.float32(color[v, u, k]) + zero
+            coarse[cv, cu, nc] += wt * z
+            coarse[cv, cu, nc + 1] += wt
 
 
 @njit(cache=True, error_model="numpy")
@@ -246,6 +245,17 @@ def pp_pull(fine, coarse):
                         continue
                     for k in range(n):
                         coarse[v, u, k] += fine[vv, uu, k]
+
+
+# bilinear weights of the 2x upsampling (half-pixel centres), float32 like the pyramid
+_W9 = np.float32(0.5625)
+_W3 = np.float32(0.1875)
+_W1 = np.float32(0.0625)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _up(a, cv, cu, ov, ou, k):
+    return _W9 * a[cv, cu, k] + _W3 * a[cv, ou, k] + _W3 * a[ov, cu, k] + _W1 * a[ov, ou, k]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -276,16 +286,15 @@ def pp_push(sums, coarse_val, eps, need, out_val):
             if not need[v, u]:
                 continue
             cu, ou = _up_taps(u, wc)
-            e = eps * 0.25 * (0.5625 * coarse_val[cv, cu, nv] + 0.1875 * coarse_val[cv, ou, nv]
-                              + 0.1875 * coarse_val[ov, cu, nv] + 0.0625 * coarse_val[ov, ou, nv])
+            e = eps * np.float32(0.25) * _up(coarse_val, cv, cu, ov, ou, nv)
             den = sums[v, u, nv] + e
-            for k in range(nv):
-                up = (0.5625 * coarse_val[cv, cu, k] + 0.1875 * coarse_val[cv, ou, k]
-                      + 0.1875 * coarse_val[ov, cu, k] + 0.0625 * coarse_val[ov, ou, k])
-                if den > 0.0:
-                    out_val[v, u, k] = (sums[v, u, k] + e * up) / den
-                else:
-                    out_val[v, u, k] = up
+            if den > 0.0:
+                inv = np.float32(1.0) / den
+                for k in range(nv):
+                    out_val[v, u, k] = (sums[v, u, k] + e * _up(coarse_val, cv, cu, ov, ou, k)) * inv
+            else:
+                for k in range(nv):
+                    out_val[v, u, k] = _up(coarse_val, cv, cu, ov, ou, k)
             out_val[v, u, nv] = den  # the value's weight: own + what the coarser levels carry
 
 
@@ -382,55 +391,27 @@ def pp_top(sums, out_val):
             out_val[v, u, n - 1] = wt
 
 
-# binomial [1 8 28 56 70 56 28 8 1] / 256 (sigma = sqrt(2) px) across the parallax axis
-_ACROSS = np.array([1.0, 8.0, 28.0, 56.0, 70.0, 56.0, 28.0, 8.0, 1.0], np.float32) / np.float32(256.0)
-
-
 @njit(cache=True, error_model="numpy")
-def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, across_rows, is_int, filled):
+def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, is_int, filled):
     """Last push step, fused with the write: every hole pixel takes the bilinear upsampling of
     level 1's values (it has no weight of its own), colour mixed as ``(1 - mix) * pushed + mix
-    * directional`` where the directional background fill exists. The directional part is
-    smoothed *across* the parallax axis (a 9-tap binomial over rows when ``across_rows``, i.e.
-    for row-wise fills; over columns otherwise; outside the holes it reads the image), so rows
-    copied from different neighbours do not show as streaks. Depth from the pull-push."""
+    * direct`` where the directional background fill exists; depth from the pull-push."""
     h, w, nc = color.shape
     hc, wc = coarse_val.shape[0], coarse_val.shape[1]
-    acc = np.empty(nc, np.float32)
     for v in range(h):
         cv, ov = _up_taps(v, hc)
         for u in range(w):
             if not holes[v, u]:
                 continue
             cu, ou = _up_taps(u, wc)
-            z = (0.5625 * coarse_val[cv, cu, nc] + 0.1875 * coarse_val[cv, ou, nc]
-                 + 0.1875 * coarse_val[ov, cu, nc] + 0.0625 * coarse_val[ov, ou, nc])
+            z = _up(coarse_val, cv, cu, ov, ou, nc)
             if not (z > 0.0):
                 continue
-            d = direct_ok[v, u] and mix > 0.0
-            if d:
-                for k in range(nc):
-                    acc[k] = 0.0
-                for t in range(9):
-                    if across_rows:
-                        vv = min(max(v + t - 4, 0), h - 1)
-                        uu = u
-                    else:
-                        vv = v
-                        uu = min(max(u + t - 4, 0), w - 1)
-                    inside = holes[vv, uu]
-                    if inside and not direct_ok[vv, uu]:
-                        vv = v  # no directional value there: use this pixel's
-                        uu = u
-                        inside = True
-                    for k in range(nc):
-                        x = direct[vv, uu, k] if inside else np.float32(color[vv, uu, k])
-                        acc[k] += _ACROSS[t] * x
+            d = direct_ok[v, u]
             for k in range(nc):
-                x = (0.5625 * coarse_val[cv, cu, k] + 0.1875 * coarse_val[cv, ou, k]
-                     + 0.1875 * coarse_val[ov, cu, k] + 0.0625 * coarse_val[ov, ou, k])
+                x = _up(coarse_val, cv, cu, ov, ou, k)
                 if d:
-                    x = (1.0 - mix) * x + mix * acc[k]
+                    x = (1.0 - mix) * x + mix * np.float32(direct[v, u, k])
                 if is_int:
                     x = np.floor(x + 0.5)
                 color[v, u, k] = x

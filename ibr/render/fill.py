@@ -39,6 +39,10 @@ FILLS = ("previous", "inpaint", "background", "none")
 PULLPUSH_POWER = 32.0
 PULLPUSH_EPS = 0.002
 PULLPUSH_MIX = 0.5
+#: Binomial [1 8 28 56 70 56 28 8 1] / 256 (sigma sqrt(2) px): the directional half of the
+#: pull-push fill is smoothed with it across the parallax axis.
+_ACROSS = np.array([1, 8, 28, 56, 70, 56, 28, 8, 1], np.float32) / np.float32(256)
+_ONE_PIXEL = np.zeros((1, 1, 1), np.float32)
 
 
 def _check(color, depth, holes):
@@ -240,14 +244,20 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         sm = np.empty_like(val)
         _k.binomial3(val, need[1], sm)
         val = sm
-    direct = np.empty((h, w, nc), np.float32)
     direct_ok = np.zeros((h, w), np.bool_)
-    if mix > 0:  # background side along the parallax axis (rows or columns)
+    direct = _ONE_PIXEL
+    if mix > 0:  # background side along the parallax axis (rows or columns) ...
+        direct = color.copy()  # the source dtype: uint8 filters fastest, values are copies
         if axis == 1:
             _k.axis_background(color.transpose(1, 0, 2), depth.T, holes.T, direct.transpose(1, 0, 2), direct_ok.T)
         else:
             _k.axis_background(color, depth, holes, direct, direct_ok)
-    _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, axis == 0, color.dtype.kind in "ui", filled)
+        # ... smoothed across the axis (binomial, sigma 1.4 px), so that neighbouring rows copied
+        # from different pixels do not show as streaks; outside the holes it reads the image
+        one = np.ones(1, np.float32)
+        kx, ky = (_ACROSS, one) if axis == 1 else (one, _ACROSS)
+        direct = cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc)
+    _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, color.dtype.kind in "ui", filled)
     return filled
 
 
