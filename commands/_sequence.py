@@ -51,6 +51,13 @@ class Progress:
 
 
 # --------------------------------------------------------------------------- helpers
+def FACTOR(text: str) -> int:  # noqa: N802 - an argparse type, named like one
+    """``--factor``: an integer 1 .. 1000 (a usage error otherwise)."""
+    from commands._common import number_in
+
+    return number_in(1, 1000, integer=True, what="an up-conversion factor")(text)
+
+
 def is_sequence_argument(path) -> bool:
     """True when ``path`` names a sequence (manifest or folder of numbered views)."""
     from ibr.sequence.files import is_sequence
@@ -99,9 +106,11 @@ class VideoStream:
 
 def add_video_arguments(parser, *, fps: bool = True) -> None:
     """``--video`` and ``--fps`` for commands that do not have them yet (``ibr stereo``)."""
+    from commands._common import frame_rate
+
     parser.add_argument("--video", metavar="OUT.mp4", help="sequences: also write the frames as a video")
     if fps:
-        parser.add_argument("--fps", type=float, default=None,
+        parser.add_argument("--fps", type=frame_rate, default=None,
                             help="sequences: video frame rate (default: the manifest's fps, else 24)")
 
 
@@ -109,7 +118,7 @@ def add_video_arguments(parser, *, fps: bool = True) -> None:
 def add_interpolate_arguments(parser) -> None:
     """The options ``ibr interpolate SEQ`` adds to the two-view command."""
     g = parser.add_argument_group("sequences (VIEW.json is a sequence manifest or a folder of numbered views)")
-    g.add_argument("--factor", type=int, default=None, metavar="F",
+    g.add_argument("--factor", type=FACTOR, default=None, metavar="F",
                    help="frame-rate up-conversion: F - 1 new frames between consecutive views (default 4)")
     g.add_argument("--no-tail", action="store_true",
                    help="end on the last view ((N-1)F+1 frames) instead of extrapolating F-1 frames after it (N F)")
@@ -187,6 +196,7 @@ def run_interpolate(args) -> int:
              + (f", scored against {truth.source}" if truth is not None else ""))
         bar = Progress(n_out, "interpolate")
         rows, changes, shares = [], [], []
+        hole_changes, hole_shares, truth_changes = [], [], []
         prev = prev_truth = None
         t_prev = time.perf_counter()
         try:
@@ -210,6 +220,11 @@ def run_interpolate(args) -> int:
                               else static_mask_from_motion(r.depth, r.camera, prev.camera))
                     changes.append(frame_change(prev.color, r.color, static))
                     shares.append(float(static.mean()))
+                    in_holes = static & (r.holes | prev.holes)  # where the fill, not the warp, decides
+                    hole_changes.append(frame_change(prev.color, r.color, in_holes))
+                    hole_shares.append(float(in_holes.mean()))
+                    if gt is not None:
+                        truth_changes.append(frame_change(prev_truth, gt, static))
                 prev, prev_truth = r, gt
                 rows.append(row)
                 bar.step()
@@ -218,15 +233,21 @@ def run_interpolate(args) -> int:
             if stream is not None:
                 stream.close()
         fl = summarize_flicker(changes, shares)
+        fl_holes = summarize_flicker(hole_changes, hole_shares)
         inner = [row for row in rows if not row["key"]]
         med = np.median([row["ms"] for row in inner]) if inner else float("nan")
         info(f"interpolate: {len(inner)} new frames, median {med:.1f} ms per frame; holes "
              f"{np.mean([row['holes'] for row in inner]):.3%} of pixels before filling")
         basis = "ground truth unchanged" if truth is not None else "static by depth and camera motion (< 0.5 px)"
-        info(f"interpolate: flicker {fl.mean * 255:.3f} (8-bit levels, mean |change| between consecutive frames "
-             f"over static pixels: {basis}; {fl.static_fraction:.1%} of pixels)")
+        floor = summarize_flicker(truth_changes, shares).mean if truth_changes else None
+        info(f"interpolate: flicker {fl.mean * 255:.4f} 8-bit levels (mean |change| between consecutive frames "
+             f"over static pixels: {basis}; {fl.static_fraction:.1%} of pixels"
+             + (f"; the exact frames: {floor * 255:.4f}" if floor is not None else "") + "); "
+             f"in static hole pixels {fl_holes.mean * 255:.3f} ({fl_holes.static_fraction:.4%} of pixels)")
         summary = {"frames": len(rows), "keys": len(seq), "factor": factor, "fill": args.fill,
                    "flicker": fl.mean, "flicker_8bit": fl.mean * 255, "static_fraction": fl.static_fraction,
+                   "flicker_holes_8bit": fl_holes.mean * 255, "hole_static_fraction": fl_holes.static_fraction,
+                   "flicker_truth_8bit": None if floor is None else floor * 255,
                    "static_basis": "truth" if truth is not None else "motion", "median_ms": med}
         scored = [row["psnr"] for row in inner if "psnr" in row]
         if scored:
@@ -341,15 +362,18 @@ def run_stereo(args) -> int:
 # --------------------------------------------------------------------------- samples
 def add_samples_arguments(parser) -> None:
     """``ibr samples --sequence``: a short synthetic RGB-D sequence with exact in-between frames."""
+    from commands._common import frame_rate, number_in
+
     g = parser.add_argument_group("a synthetic sequence (--sequence; instead of the bundled views)")
     g.add_argument("--sequence", action="store_true",
                    help="write a camera path through a synthetic scene: key views (SCENE_walk.json) and the exact "
                         "frames of their up-conversion by --factor (SCENE_truth.json, the ground truth)")
     g.add_argument("--scene", default="room", help="synthetic scene of the sequence (default: %(default)s)")
-    g.add_argument("--keys", type=int, default=10, help="number of key views (default: %(default)s)")
-    g.add_argument("--factor", type=int, default=4, help="up-conversion factor of the ground truth (default: %(default)s)")
+    g.add_argument("--keys", type=number_in(2, 10000, integer=True, what="a number of key views"), default=10,
+                   help="number of key views (default: %(default)s)")
+    g.add_argument("--factor", type=FACTOR, default=4, help="up-conversion factor of the ground truth (default: %(default)s)")
     g.add_argument("--size", default="320x240", metavar="WxH", help="image size (default: %(default)s)")
-    g.add_argument("--fps", type=float, default=10.0, help="frame rate of the key views (default: %(default)s)")
+    g.add_argument("--fps", type=frame_rate, default=10.0, help="frame rate of the key views (default: %(default)s)")
 
 
 def _size(text: str) -> tuple[int, int]:

@@ -14,14 +14,16 @@ HELP = "run a batch of ibr command lines (JSON) on a local process pool or a Das
 
 
 def add_arguments(parser) -> None:
+    from commands._common import positive_float, positive_int
+
     parser.add_argument("jobs", metavar="JOBS.json", help="batch file: a list of ibr command lines (docs/sequences.md)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="Dask scheduler address (e.g. tcp://10.0.0.5:8786); default: a local process pool")
-    parser.add_argument("--workers", type=int, default=None, metavar="N",
+    parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
                         help="local pool size (default: the number of CPUs); ignored with --scheduler")
-    parser.add_argument("--threads-per-job", type=int, default=1, metavar="N",
+    parser.add_argument("--threads-per-job", type=positive_int, default=1, metavar="N",
                         help="threads each job may use (default: %(default)s; the pool uses the cores)")
-    parser.add_argument("--timeout", type=float, default=None, metavar="S", help="seconds per job before it is killed")
+    parser.add_argument("--timeout", type=positive_float, default=None, metavar="S", help="seconds per job before it is killed")
     parser.add_argument("--records", metavar="DIR",
                         help="records folder, shared by all workers (default: .ibr-batch/ beside JOBS.json)")
     parser.add_argument("--report", metavar="REPORT.json",

@@ -25,7 +25,8 @@ Running a job (:func:`run_job`, on any worker) is idempotent and leaves no parti
 3. otherwise every output value on the command line is redirected into a hidden staging folder
    ``.ibr-batch-<id>-<token>/`` beside the output, the command runs in a child process
    (``python -c`` running ``cli.main``; the child exits when its parent dies), and only when it
-   succeeds are the staged files renamed into place (each rename atomic); the record, written
+   succeeds are the staged files renamed into place (each rename atomic; files already in an output
+   folder that the command did not write are left alone); the record, written
    atomically after them, marks the job done. A worker killed at any point leaves at most a
    staging folder, which the next attempt of the job removes before it starts.
 
@@ -273,7 +274,9 @@ def _read_record(path: Path):
 
 
 def _up_to_date(record, job: Job, inputs: dict) -> bool:
-    if record is None or record.get("argv") != list(job.argv) or record.get("cwd") != job.cwd:
+    # The working folder itself is not compared: a batch folder moved or copied elsewhere with its
+    # records keeps its finished jobs (inputs and outputs are compared by content, relative to it).
+    if record is None or record.get("argv") != list(job.argv):
         return False
     if record.get("inputs") != inputs:
         return False
@@ -340,25 +343,17 @@ def _remove_stale_stages(job: Job) -> int:
 
 
 def _commit(stages: list[Path]) -> list[Path]:
-    """Rename every staged file into the stage's parent folder (same relative path); a staged
-    folder replacing an existing folder is swapped in whole. Returns the final files."""
+    """Rename every staged file into the stage's parent folder at the same relative path (each
+    rename atomic; an output folder gets the new files, other files in it are left alone).
+    Returns the final files."""
     finals: list[Path] = []
     for stage in stages:
         parent = stage.parent
-        for entry in sorted(stage.iterdir()):
-            final = parent / entry.name
-            if entry.is_dir():
-                if final.is_dir():  # swap: the old folder leaves, the new one arrives whole
-                    old = stage / f".old-{entry.name}"
-                    os.rename(final, old)
-                    os.rename(entry, final)
-                    shutil.rmtree(old, ignore_errors=True)
-                else:
-                    os.rename(entry, final)
-                finals += [p for p in sorted(final.rglob("*")) if p.is_file()]
-            else:
-                os.replace(entry, final)
-                finals.append(final)
+        for src in sorted(p for p in stage.rglob("*") if p.is_file()):
+            final = parent / src.relative_to(stage)
+            final.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(src, final)
+            finals.append(final)
         shutil.rmtree(stage, ignore_errors=True)
     return finals
 

@@ -1,0 +1,201 @@
+"""``ibr batch`` (issue #15): idempotent jobs on a local process pool and on a Dask LocalCluster.
+
+Each batch is a few ``ibr stereo`` / ``ibr interpolate`` command lines on 48 x 36 synthetic views
+(about 1 s per job, mostly interpreter start-up). The workers are killed with SIGKILL mid-batch:
+every job must still be committed exactly once (``commits.log``), leave no staging folder or
+temporary file, and give the same pixels as an undisturbed run.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import shutil
+import signal
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cli
+from ibr.io import read_image, save_view
+from ibr.sequence import load_jobs, run_batch
+from ibr.synth import camera_path, make_scene, render_path
+
+N_STEREO = 3
+
+
+def _make_batch(folder: Path, views) -> Path:
+    """Views and a batch file in ``folder``: 3 stereo jobs, 1 interpolate job (folder output), 1 failing job."""
+    (folder / "views").mkdir(parents=True)
+    for v in views:
+        save_view(v, folder / "views" / f"{v.name}.json")
+    jobs = [{"id": f"stereo-{i}", "argv": ["stereo", f"views/{views[i].name}.json", "--mode", "sbs",
+                                          "-o", f"out/stereo_{i}.png"]} for i in range(N_STEREO)]
+    jobs.append({"id": "mid", "command": f"ibr interpolate views/{views[0].name}.json views/{views[1].name}.json "
+                                         "--frames 3 --out out/mid"})
+    jobs.append({"id": "broken", "argv": ["stereo", "views/missing.json", "-o", "out/broken.png"]})
+    path = folder / "jobs.json"
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 1, "jobs": jobs}, indent=1))
+    return path
+
+
+@pytest.fixture(scope="module")
+def views():
+    cams = camera_path("room", N_STEREO, width=48, height=36)
+    return render_path(make_scene("room"), cams, supersample=1, name="v")
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory, views):
+    """One undisturbed local-pool run: its folder and report."""
+    folder = tmp_path_factory.mktemp("reference")
+    jobs = load_jobs(_make_batch(folder, views))
+    report = run_batch(jobs, records=folder / ".ibr-batch", workers=2)
+    return folder, report
+
+
+def _outputs(folder: Path) -> dict[str, np.ndarray]:
+    return {str(p.relative_to(folder)): read_image(p) for p in sorted((folder / "out").rglob("*.png"))}
+
+
+def _assert_clean(folder: Path) -> None:
+    leftovers = [p.name for p in (folder / "out").rglob("*") if p.name.startswith(".")]
+    assert leftovers == []                       # no staging folder, no temporary file
+
+
+def _commits(folder: Path, run_id: str) -> list[str]:
+    lines = (folder / ".ibr-batch" / "commits.log").read_text().splitlines()
+    return sorted(json.loads(x)["id"] for x in lines if json.loads(x)["run"] == run_id)
+
+
+EXPECTED_DONE = sorted([f"stereo-{i}" for i in range(N_STEREO)] + ["mid"])
+
+
+# --------------------------------------------------------------------------- job files
+def test_load_jobs_infers_outputs_and_refuses_bad_files(tmp_path):
+    path = tmp_path / "j.json"
+    path.write_text(json.dumps([{"command": "ibr stereo a.json --mode sbs -o out/a.png"},
+                                ["warp", "a.json", "--to", "b.json", "--out=w.png"]]))
+    a, b = load_jobs(path)
+    assert a.argv == ("stereo", "a.json", "--mode", "sbs", "-o", "out/a.png") and a.outputs == ("out/a.png",)
+    assert b.outputs == ("w.png",) and a.cwd == str(tmp_path.resolve()) and a.id != b.id
+    cases = [
+        ([{"argv": ["stereo", "a.json"]}], "no output found"),
+        ([{"argv": ["batch", "x.json", "-o", "y"]}], "cannot run 'ibr batch'"),
+        ([{"id": "x", "argv": ["warp", "a", "-o", "p.png"]}, {"id": "x", "argv": ["warp", "b", "-o", "q.png"]}],
+         "id 'x'"),
+        ([{"argv": ["warp", "a", "-o", "p.png"]}, {"argv": ["warp", "b", "-o", "./p.png"]}], "also an output"),
+        ([{"argv": ["warp", "a", "-o", "p.png"], "outputs": ["q.png"]}], "does not appear"),
+        ([{"argv": ["warp", "a", "-o", "p.png"], "colour": 1}], "unknown key"),
+        ([], "non-empty list"),
+    ]
+    for doc, message in cases:
+        path.write_text(json.dumps(doc))
+        with pytest.raises(ValueError, match=message):
+            load_jobs(path)
+    with pytest.raises(FileNotFoundError):
+        load_jobs(tmp_path / "missing.json")
+
+
+# --------------------------------------------------------------------------- local pool
+def test_local_pool_runs_reports_failures_and_reruns_nothing(reference):
+    folder, report = reference
+    status = {r["id"]: r["status"] for r in report.results}
+    assert status == {**{i: "done" for i in EXPECTED_DONE}, "broken": "failed"}
+    broken = next(r for r in report.results if r["id"] == "broken")
+    assert "missing.json" in broken["error"] and broken["returncode"] == 1
+    assert _commits(folder, report.run_id) == EXPECTED_DONE
+    outs = _outputs(folder)
+    assert len(outs) == N_STEREO + 3 and outs["out/stereo_0.png"].shape == (36, 96, 3)
+    _assert_clean(folder)
+    table = report.table()
+    assert "4 done, 0 skipped" in table and "1 failed" in table and "broken" in table
+
+    again = run_batch(load_jobs(folder / "jobs.json"), records=folder / ".ibr-batch", workers=2)
+    assert again.counts == {"done": 0, "skipped": 4, "failed": 1}
+    assert _commits(folder, again.run_id) == []                # a second run does no work
+
+
+def test_a_changed_input_or_a_deleted_output_reruns_only_its_job(tmp_path, reference):
+    from ibr.io import write_image
+
+    folder = tmp_path / "copy"                                  # the finished batch, moved elsewhere
+    shutil.copytree(reference[0], folder)
+    color = next((folder / "views").glob("*_0002_color.png"))
+    write_image(color, 255 - read_image(color))                 # input of stereo-2 only
+    (folder / "out" / "stereo_1.png").unlink()                  # output of stereo-1
+    rerun = run_batch(load_jobs(folder / "jobs.json"), records=folder / ".ibr-batch", workers=2)
+    assert sorted(r["id"] for r in rerun.results if r["status"] == "done") == ["stereo-1", "stereo-2"]
+    assert rerun.counts["skipped"] == 2
+
+
+def test_cli_batch_writes_the_table_and_the_report(tmp_path, views, capsys):
+    path = _make_batch(tmp_path, views)
+    doc = json.loads(path.read_text())
+    doc["jobs"] = doc["jobs"][:1] + doc["jobs"][-1:]            # one good job, one broken
+    path.write_text(json.dumps(doc))
+    assert cli.main(["batch", str(path), "--workers", "1"]) == 1  # a failed job: exit code 1
+    out = capsys.readouterr()
+    assert "1 done, 0 skipped (up to date), 1 failed" in out.out and "jobs/s" in out.err
+    report = json.loads((tmp_path / "jobs.report.json").read_text())
+    assert report["counts"] == {"done": 1, "skipped": 0, "failed": 1}
+
+
+def test_local_pool_survives_a_killed_worker(tmp_path, views, reference):
+    path = _make_batch(tmp_path, views)
+    killed = []
+
+    def kill_one(result):
+        if not killed:
+            victims = multiprocessing.active_children()
+            assert victims
+            os.kill(victims[0].pid, signal.SIGKILL)
+            killed.append(victims[0].pid)
+
+    report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=2, on_result=kill_one)
+    assert killed
+    assert report.counts == {"done": 4, "skipped": 0, "failed": 1}
+    assert any(r["interrupted_attempts"] or r["recovered"] for r in report.results)  # a job was cut short
+    assert _commits(tmp_path, report.run_id) == EXPECTED_DONE  # exactly once each
+    _assert_clean(tmp_path)
+    ref = _outputs(reference[0])
+    got = _outputs(tmp_path)
+    assert got.keys() == ref.keys() and all(np.array_equal(got[k], ref[k]) for k in ref)
+
+
+# --------------------------------------------------------------------------- Dask
+def test_dask_cluster_killed_worker_exactly_once_and_same_pixels(tmp_path, views, reference):
+    distributed = pytest.importorskip("distributed")
+    path = _make_batch(tmp_path, views)
+    records = tmp_path / ".ibr-batch"
+    # 4 workers on this 2-core machine: oversubscribed on purpose
+    with distributed.LocalCluster(n_workers=4, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  silence_logs=50) as cluster, distributed.Client(cluster) as client:
+        killed = []
+
+        def kill_busy_worker(result):
+            if killed:
+                return
+            busy = [addr for addr, keys in client.processing().items() if keys]
+            if busy:
+                pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
+                os.kill(pid, signal.SIGKILL)
+                killed.append(pid)
+
+        report = run_batch(load_jobs(path), records=records, scheduler=client, on_result=kill_busy_worker)
+        assert killed
+        assert report.where.startswith("dask tcp://")
+        assert any(r["interrupted_attempts"] or r["recovered"] for r in report.results)  # a job was cut short
+        assert report.counts == {"done": 4, "skipped": 0, "failed": 1}
+        assert _commits(tmp_path, report.run_id) == EXPECTED_DONE   # exactly once each
+        _assert_clean(tmp_path)
+        ref = _outputs(reference[0])
+        got = _outputs(tmp_path)
+        assert got.keys() == ref.keys() and all(np.array_equal(got[k], ref[k]) for k in ref)
+
+        again = run_batch(load_jobs(path), records=records, scheduler=cluster.scheduler_address)  # by address
+        assert again.counts == {"done": 0, "skipped": 4, "failed": 1}
+        assert _commits(tmp_path, again.run_id) == []
+    shutil.rmtree(tmp_path / "out")
