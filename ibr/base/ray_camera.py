@@ -146,6 +146,17 @@ class SphericalCamera:
         x = np.clip((lat - a) / (b - a), 0.0, 1.0)
         return 0.5 * self.ipd * 0.5 * (1.0 + np.cos(np.pi * x))
 
+    def radius_slope(self, lat) -> np.ndarray:
+        """d r / d lat (scene units per radian) of :meth:`radius` (odd in lat, 0 outside the fade)."""
+        lat = np.asarray(lat, dtype=np.float64)
+        if self.sign == 0:
+            return np.zeros_like(lat)
+        a, b = math.radians(self.fade_start_deg), math.radians(self.fade_end_deg)
+        x = (np.abs(lat) - a) / (b - a)
+        inside = (x > 0) & (x < 1)
+        slope = -0.5 * self.ipd * 0.5 * np.pi * np.sin(np.pi * np.clip(x, 0, 1)) / (b - a)
+        return np.where(inside, np.sign(lat) * slope, 0.0)
+
     def row_tables(self) -> np.ndarray:
         """(H, 3) float64 ``[sin lat, cos lat, s * r(lat)]`` of each row centre (for kernels)."""
         lat = self.lat(np.arange(self.height))
@@ -176,13 +187,16 @@ class SphericalCamera:
         return o @ m[:3, :3].T + m[:3, 3], d @ m[:3, :3].T
 
     # ------------------------------------------------------------------ projection
-    def project(self, points_world, *, iterations: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def project(self, points_world, *, iterations: int = 16) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Pixel coordinates (u, v) and range of world points seen by this camera.
 
         Returns ``(u, v, range)``; u in [-0.5, W - 0.5) (wrapped), v in [-0.5, H - 0.5]. Points the
         eye cannot see (closer to the vertical axis than the viewing circle, ``rho < r``) get NaN.
-        Inside the fade latitude band r depends on the latitude: ``iterations`` fixed-point steps
-        (each contracts the error by about ``|dr/dlat| / rho``).
+        Inside the fade latitude band r depends on the latitude: ``lat`` solves
+        ``g(lat) = lat - atan2(-y, sqrt(rho^2 - r(lat)^2)) = 0``; g is strictly increasing (r falls
+        toward the poles), so ``iterations`` Newton steps kept inside a shrinking bracket converge
+        even for points a few centimetres from the viewing circle (where plain fixed-point steps
+        diverge: their factor ``|dr/dlat| / rho`` exceeds 1).
         """
         p = np.asarray(points_world, dtype=np.float64)
         m = self.world_from_rig
@@ -192,10 +206,22 @@ class SphericalCamera:
         alpha = np.arctan2(x, z)
         lat = np.arctan2(-y, rho)
         r = np.zeros_like(rho)
-        with np.errstate(invalid="ignore"):
-            for _ in range(iterations if self.sign else 1):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            if self.sign:
+                lo = np.full_like(lat, -np.pi / 2)
+                hi = np.full_like(lat, np.pi / 2)
+                for _ in range(iterations):
+                    r = self.radius(lat)
+                    s2 = np.maximum(rho * rho - r * r, 1e-300)
+                    sq = np.sqrt(s2)
+                    g = lat - np.arctan2(-y, sq)
+                    lo = np.where(g < 0, lat, lo)
+                    hi = np.where(g > 0, lat, hi)
+                    dg = 1.0 + y * r * self.radius_slope(lat) / (sq * (s2 + y * y))
+                    step = lat - g / dg
+                    bisect = ~((step > lo) & (step < hi))
+                    lat = np.where(bisect, 0.5 * (lo + hi), step)
                 r = self.radius(lat)
-                lat = np.arctan2(-y, np.sqrt(rho * rho - r * r))
             lon = alpha - np.arcsin(self.sign * r / rho) if self.sign else alpha
             rng = np.sqrt(np.maximum(rho * rho - r * r, 0.0) + y * y)
         lon = (lon + np.pi) % (2 * np.pi) - np.pi

@@ -4,14 +4,17 @@ Each source is added in turn to running per-pixel accumulators (no N-layer stack
 ``front`` is the nearest range seen so far; a new sample nearer than ``front * (1 - tol)``
 replaces the accumulators (it occludes what was there), one within ``front * (1 +- tol)`` joins
 the weighted sum, a farther one is hidden. Colour is sampled bilinearly at the source position
-(pixel centres at integers, taps clamped to the image) only where a source covers the pixel.
+(or bicubic, Keys a = -0.75 as OpenCV's INTER_CUBIC; pixel centres at integers, taps clamped
+to the image) only where a source covers the pixel.
 
 Weight of a sample (all factors in [0, 1]):
-``w = incidence**2 * exp(-(angle / sigma)**2) * min(1, border_px / feather)`` with angle^2 taken as
+``w = incidence**2 * exp(-(angle / sigma)**2) * min(1, border_px / feather) * confidence`` with angle^2 taken as
 ``2 (1 - cos angle)``, ``angle`` the angle
 at the surface point between the target ray and the ray from the source camera's centre,
 ``incidence`` the cosine between the source ray and the surface normal, ``border_px`` the
-distance of the sample from the source image's border (feathering hides where a source ends).
+distance of the sample from the source image's border (feathering hides where a source ends),
+``confidence`` the source pixel's distance from its own depth edges (mixed fg/bg pixels lose to a
+clean pixel of another source).
 A tiny floor keeps every covering sample's weight positive so no covered pixel becomes a hole.
 """
 
@@ -44,7 +47,41 @@ def _bilinear(src, x, y, ch):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, front, best_w, best_id):
+def _cubic_weights(t):
+    """Keys cubic convolution weights (a = -0.75, OpenCV's INTER_CUBIC) of the taps -1, 0, 1, 2."""
+    a = -0.75
+    t1 = t + 1.0
+    t2 = 1.0 - t
+    t3 = 2.0 - t
+    w0 = ((a * t1 - 5.0 * a) * t1 + 8.0 * a) * t1 - 4.0 * a
+    w1 = ((a + 2.0) * t - (a + 3.0)) * t * t + 1.0
+    w2 = ((a + 2.0) * t2 - (a + 3.0)) * t2 * t2 + 1.0
+    w3 = 1.0 - w0 - w1 - w2
+    return w0, w1, w2, w3
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _bicubic(src, x, y, ch):
+    """Bicubic sample (pixel centres at integers; taps clamped to the image)."""
+    h, w = src.shape[0], src.shape[1]
+    fx0 = math.floor(x)
+    fy0 = math.floor(y)
+    wx = _cubic_weights(x - fx0)
+    wy = _cubic_weights(y - fy0)
+    ix, iy = int(fx0), int(fy0)
+    total = 0.0
+    for j in range(4):
+        yy = min(max(iy - 1 + j, 0), h - 1)
+        row = 0.0
+        for i in range(4):
+            xx = min(max(ix - 1 + i, 0), w - 1)
+            row += wx[i] * src[yy, xx, ch]
+        total += wy[j] * row
+    return total
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, acc_z, front, best_w, best_id):
     f = front[v, u]
     if z < f * (1.0 - rel_tol):  # nearer surface: occludes what was accumulated
         for ch in range(acc.shape[2]):
@@ -58,7 +95,7 @@ def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, f
     elif z < f:
         front[v, u] = z
     for ch in range(acc.shape[2]):
-        acc[v, u, ch] += wgt * _bilinear(src, us, vs, ch)
+        acc[v, u, ch] += wgt * (_bicubic(src, us, vs, ch) if cubic else _bilinear(src, us, vs, ch))
     acc_w[v, u] += wgt
     acc_z[v, u] += wgt * z
     if wgt > best_w[v, u]:
@@ -67,25 +104,28 @@ def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, f
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _weight(px, py, pz, dx, dy, dz, cxs, cys, czs, incid, us, vs, src_w, src_h, inv_sigma2, inv_feather):
+def _weight(px, py, pz, dx, dy, dz, cxs, cys, czs, incid, us, vs, conf, inv_sigma2, inv_feather):
     # angle between the target ray d and the source ray (P - C) at the surface point P, through
     # angle^2 ~= 2 (1 - cos angle) (exact to 0.1 % below 10 degrees; monotonic everywhere)
     sx, sy, sz = px - cxs, py - cys, pz - czs
     ns2 = sx * sx + sy * sy + sz * sz
     cosang = (sx * dx + sy * dy + sz * dz) / math.sqrt(max(ns2, 1e-300))
     ang2 = 2.0 * (1.0 - cosang)
+    src_h, src_w = conf.shape
     border = min(min(us + 0.5, src_w - 0.5 - us), min(vs + 0.5, src_h - 0.5 - vs))
     feather = min(1.0, max(0.0, border * inv_feather))
-    return max(incid * incid * math.exp(-ang2 * inv_sigma2) * feather, _W_FLOOR)
+    # confidence of the source pixel: low on both sides of the source's own depth edges, where
+    # pixels mix foreground and background colour (nearest pixel)
+    c = conf[min(max(int(vs + 0.5), 0), src_h - 1), min(max(int(us + 0.5), 0), src_w - 1)]
+    return max(incid * incid * math.exp(-ang2 * inv_sigma2) * feather * c, _W_FLOOR)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def accumulate_spherical(src, map_u, map_v, rng, incid, rows, cols, center, v0, v1, colmask, src_id, rel_tol,
-                         inv_sigma2, inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
+def accumulate_spherical(src, conf, map_u, map_v, rng, incid, rows, cols, center, v0, v1, colmask, src_id, rel_tol,
+                         cubic, inv_sigma2, inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
     """Add one source rendered into a spherical camera (rig-frame tables, see _ray_kernels);
     only rows v0..v1 and the columns set in colmask are read (the raster's region)."""
     h, w = rng.shape
-    src_h, src_w = src.shape[0], src.shape[1]
     for v in prange(max(v0, 0), min(v1 + 1, h)):
         slat, clat, sr = rows[v, 0], rows[v, 1], rows[v, 2]
         for u in range(w):
@@ -98,13 +138,13 @@ def accumulate_spherical(src, map_u, map_v, rng, incid, rows, cols, center, v0, 
             dx, dy, dz = clat * slon, -slat, clat * clon
             px, py, pz = sr * clon + z * dx, z * dy, -sr * slon + z * dz
             us, vs = map_u[v, u], map_v[v, u]
-            wgt = _weight(px, py, pz, dx, dy, dz, center[0], center[1], center[2], incid[v, u], us, vs,
-                          src_w, src_h, inv_sigma2, inv_feather)
-            _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, front, best_w, best_id)
+            wgt = _weight(px, py, pz, dx, dy, dz, center[0], center[1], center[2], incid[v, u], us, vs, conf,
+                          inv_sigma2, inv_feather)
+            _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, acc_z, front, best_w, best_id)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def accumulate_pinhole(src, map_u, map_v, depth, incid, kinv, center, src_id, rel_tol, inv_sigma2,
+def accumulate_pinhole(src, conf, map_u, map_v, depth, incid, kinv, center, src_id, rel_tol, cubic, inv_sigma2,
                        inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
     """Add one source rendered into a pinhole target (planar depth z, target camera frame).
 
@@ -113,7 +153,6 @@ def accumulate_pinhole(src, map_u, map_v, depth, incid, kinv, center, src_id, re
     range along each ray).
     """
     h, w = depth.shape
-    src_h, src_w = src.shape[0], src.shape[1]
     for v in prange(h):
         for u in range(w):
             z = depth[v, u]
@@ -126,8 +165,8 @@ def accumulate_pinhole(src, map_u, map_v, depth, incid, kinv, center, src_id, re
             px, py, pz = rx * z, ry * z, z
             us, vs = map_u[v, u], map_v[v, u]
             wgt = _weight(px, py, pz, rx / nrm, ry / nrm, rz / nrm, center[0], center[1], center[2], incid[v, u],
-                          us, vs, src_w, src_h, inv_sigma2, inv_feather)
-            _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, acc, acc_w, acc_z, front, best_w, best_id)
+                          us, vs, conf, inv_sigma2, inv_feather)
+            _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, acc_z, front, best_w, best_id)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)

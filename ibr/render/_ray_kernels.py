@@ -12,7 +12,7 @@ camera lies on the side ``n . X < off``. A pixel's ray meets the plane at
 the rect's half-open pixel-edge outline (the same fill rule as the pinhole rasterizer), and ``t``
 beats the z-buffer (range along the unit ray).
 
-Conservative bounds: each quad's outline is sampled along its four edges (spacing <= 2 px in the
+Conservative bounds: each quad's outline is sampled along its four edges (spacing <= 1 px in the
 target), projected with the camera's inverse, unwrapped across the +-180 deg seam and padded;
 quads over a pole (the vertical ray from the rig centre hits them) span all columns up to that
 pole's row.
@@ -27,7 +27,7 @@ from numba import njit, prange
 
 __all__: list[str] = []
 
-_PAD = 2  # pixels added around the sampled outline's bounds
+_PAD = 0.75  # pixels of slack around the sampled outline (curvature between samples <= 1 px apart)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -40,18 +40,40 @@ def _radius(lat_abs, r0, fa, fb):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _radius_slope(lat, r0, fa, fb):
+    x = (abs(lat) - fa) / (fb - fa)
+    if x <= 0.0 or x >= 1.0:
+        return 0.0
+    s = -r0 * 0.5 * math.pi * math.sin(math.pi * x) / (fb - fa)
+    return s if lat > 0 else -s
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _project(x, y, z, sign, r0, fa, fb, width, height):
-    """(u, v, ok) of a rig-frame point (see SphericalCamera.project)."""
+    """(u, v, ok) of a rig-frame point (see SphericalCamera.project: bracketed Newton on lat)."""
     rho = math.hypot(x, z)
     alpha = math.atan2(x, z)
     lat = math.atan2(-y, rho)
     r = 0.0
     if sign != 0:
-        for _ in range(6):
+        lo, hi = -0.5 * math.pi, 0.5 * math.pi
+        for _ in range(16):
             r = _radius(abs(lat), r0, fa, fb)
-            if rho <= r:
-                return 0.0, 0.0, False
-            lat = math.atan2(-y, math.sqrt(rho * rho - r * r))
+            s2 = max(rho * rho - r * r, 1e-300)
+            sq = math.sqrt(s2)
+            g = lat - math.atan2(-y, sq)
+            if g < 0.0:
+                lo = lat
+            elif g > 0.0:
+                hi = lat
+            else:
+                break
+            dg = 1.0 + y * r * _radius_slope(lat, r0, fa, fb) / (sq * (s2 + y * y))
+            step = lat - g / dg
+            lat = step if lo < step < hi else 0.5 * (lo + hi)
+        r = _radius(abs(lat), r0, fa, fb)
+        if rho <= r:
+            return 0.0, 0.0, False
         lon = alpha - math.asin(sign * r / rho)
     else:
         lon = alpha
@@ -135,7 +157,7 @@ def _setup_rays(rects, planes, src_k, rot, tr, sign, r0, fa, fb, width, height, 
             lb = math.sqrt(bx * bx + by * by + bz * bz)
             cosang = (ax * bx + ay * by + az * bz) / max(la * lb, 1e-300)
             ang = math.acos(min(1.0, max(-1.0, cosang)))
-            n = int(min(2048.0, ang * width / (2.0 * math.pi) / 2.0)) + 1
+            n = int(min(4096.0, ang * width / (2.0 * math.pi))) + 1
             for i in range(n):
                 s = i / n
                 # the edge is straight in the source image and on the plane: interpolate in
@@ -168,12 +190,12 @@ def _setup_rays(rects, planes, src_k, rot, tr, sign, r0, fa, fb, width, height, 
             vmin = -0.5
         if down:
             vmax = height - 0.5
-        ulo = int(math.floor(umin)) - _PAD
-        uhi = int(math.ceil(umax)) + _PAD
+        ulo = int(math.ceil(umin - _PAD))  # pixel centres (integers) within the padded outline
+        uhi = int(math.floor(umax + _PAD))
         if up or down or uhi - ulo + 1 >= width:
             ulo, uhi = 0, width - 1
-        vlo = max(0, int(math.floor(vmin)) - _PAD)
-        vhi = min(height - 1, int(math.ceil(vmax)) + _PAD)
+        vlo = max(0, int(math.ceil(vmin - _PAD)))
+        vhi = min(height - 1, int(math.floor(vmax + _PAD)))
         bbox[q, 0], bbox[q, 1], bbox[q, 2], bbox[q, 3] = ulo, vlo, uhi, vhi
 
 
@@ -203,7 +225,58 @@ def region(bbox, width, height):
     return v0, v1, cols
 
 
-def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band_start, band_quads,
+@njit(cache=True, error_model="numpy", inline="always")
+def _arc(lx, ly, lz, slat, clat, lo, hi, mid):
+    """Narrow [lo, hi] (unwrapped longitudes, hi - lo < pi) to where ``l . d(lon) >= 0`` on a row
+    of latitude lat: ``l . d = R cos(lon - lon0) + C`` with ``(R sin lon0, R cos lon0) =
+    clat (lx, lz)``, ``C = -slat ly``. The failing set is the arc ``|lon - lon0 - pi| < pi - h``,
+    ``h = acos(-C / R)``; each of its copies (every 2 pi) that covers an end of [lo, hi] cuts it
+    there; a copy strictly inside would split it in two, and is left to the per-pixel test."""
+    a = clat * lx
+    b = clat * lz
+    c = -slat * ly
+    r = math.hypot(a, b)
+    if r < 1e-300:
+        return (lo, hi) if c >= 0.0 else (1.0, -1.0)
+    k = -c / r
+    if k <= -1.0:
+        return lo, hi
+    if k > 1.0:
+        return 1.0, -1.0
+    half = math.pi - math.acos(k)  # half-width of the failing arc
+    centre = math.atan2(a, b) + math.pi
+    centre += 2.0 * math.pi * round((mid - centre) / (2.0 * math.pi))
+    for shift in (-2.0 * math.pi, 0.0, 2.0 * math.pi):
+        clo = centre + shift - half
+        chi = centre + shift + half
+        if clo <= lo and chi >= hi:
+            return 1.0, -1.0
+        if clo <= lo < chi:
+            lo = chi
+        elif clo < hi <= chi:
+            hi = clo
+    return lo, hi
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _row_span(forms, slat, clat, ulo, uhi, width):
+    """Columns [a, b] of a row whose rays start at the rig centre that can hit the quad: the
+    intersection of the six arcs of ``forms`` (6, 3) (4 rect sides, z_s > 0, n . d > 0), widened by
+    one pixel each way (the exact per-pixel test decides)."""
+    scale = 2.0 * math.pi / width
+    lo = ((ulo + 0.5) - 0.5 * width) * scale - scale
+    hi = ((uhi + 0.5) - 0.5 * width) * scale + scale
+    mid = 0.5 * (lo + hi)
+    for i in range(6):
+        lo, hi = _arc(forms[i, 0], forms[i, 1], forms[i, 2], slat, clat, lo, hi, mid)
+        if lo > hi:
+            return 1, 0
+    a = int(math.floor((lo / (2.0 * math.pi) + 0.5) * width - 0.5)) - 1
+    b = int(math.ceil((hi / (2.0 * math.pi) + 0.5) * width - 0.5)) + 1
+    return max(a, ulo), min(b, uhi)
+
+
+def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band_start, band_quads, band_order,
                  far_coord, v0, v1, colmask, rng, map_u, map_v, coverage, incid):
     """Z-buffered ray casting of quads into a spherical camera, one band of rows per task.
 
@@ -217,9 +290,12 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
     fx, fy, cx, cy = src_k[0], src_k[1], src_k[2], src_k[3]
     nbands = band_start.shape[0] - 1
     rows_per_band = (height + nbands - 1) // nbands
-    for band in prange(nbands):
+    for task in prange(nbands):
+        band = band_order[task]
         r0 = band * rows_per_band
         r1 = min(height, r0 + rows_per_band)
+        m = np.empty((3, 3))
+        forms = np.empty((6, 3))
         for v in range(max(r0, v0), min(r1, v1 + 1)):
             for u in range(width):
                 if colmask[u]:
@@ -233,10 +309,31 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
             su0, sv0 = float(rects[q, 0]), float(rects[q, 1])
             su1, sv1 = float(rects[q, 2] - 1), float(rects[q, 3] - 1)
             cl, ct, cr, cb = clamp[q, 0] != 0, clamp[q, 1] != 0, clamp[q, 2] != 0, clamp[q, 3] != 0
+            ulo, uhi = bbox[q, 0], bbox[q, 2]
+            # Rows whose rays start at the rig centre (mono; ODS beyond the fade): every test is a
+            # linear form in d, l . d >= 0 with l = M^T e, M = R + T n^T / off (the hit X = off d /
+            # (n . d) maps to X_s ~ M d), so the row's columns narrow to an arc analytically.
+            narrow = off > 0.0 and uhi - ulo < width // 2
+            if narrow:
+                for i in range(3):
+                    for j in range(3):
+                        m[i, j] = rot[i, j] + tr[i] * plane_rig[q, j] / off
+                for j in range(3):
+                    forms[0, j] = fx * m[0, j] + (cx - eu0) * m[2, j]
+                    forms[1, j] = -(fx * m[0, j] + (cx - eu1) * m[2, j])
+                    forms[2, j] = fy * m[1, j] + (cy - ev0) * m[2, j]
+                    forms[3, j] = -(fy * m[1, j] + (cy - ev1) * m[2, j])
+                    forms[4, j] = m[2, j]
+                    forms[5, j] = plane_rig[q, j]
             for v in range(max(bbox[q, 1], r0), min(bbox[q, 3] + 1, r1)):
                 slat, clat, sr = rows[v, 0], rows[v, 1], rows[v, 2]
-                for uw in range(bbox[q, 0], bbox[q, 2] + 1):
-                    u = uw % width
+                a, b = ulo, uhi
+                if narrow and sr == 0.0:
+                    a, b = _row_span(forms, slat, clat, ulo, uhi, width)
+                for uw in range(a, b + 1):
+                    u = uw if uw < width else uw - width
+                    if u < 0:
+                        u += width
                     slon, clon = cols[u, 0], cols[u, 1]
                     ox, oz = sr * clon, -sr * slon
                     side = nx * ox + nz * oz - off

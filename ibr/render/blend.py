@@ -6,8 +6,8 @@ or :class:`~ibr.base.ray_camera.SphericalCamera`), then added to running accumul
 per-pixel z-test of relative tolerance ``rel_tol`` (the nearest surface wins; samples of the same
 surface within the tolerance are blended). Weights (see :mod:`ibr.render._blend_kernels`) prefer
 the source that sees the surface from nearest the target ray (small angle at the surface point),
-most frontally (incidence; spherical targets), and fade toward each source's image border so the
-change of winning source leaves no seam.
+most frontally (incidence; spherical targets), away from its own depth edges (mixed pixels), and
+fade toward each source's image border so the change of winning source leaves no seam.
 
 Conventions: colour float32 in the sources' value scale; depth is the range along each ray for
 spherical targets and planar z for pinhole targets; ``holes`` is True where no source saw the
@@ -16,20 +16,63 @@ pixel; ``winner`` the index of the highest-weight source per pixel (-1 in holes)
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import Sequence
 
+import cv2
 import numpy as np
 
 from ..base.camera import Camera
 from ..base.ray_camera import SphericalCamera
-from ..base.validate import check_positive
+from ..base.validate import check_choice, check_positive
 from . import _blend_kernels as _k
-from .rasterize import as_float_color, rasterize_mesh, scratch
+from .rasterize import _mesh_inv_depth, as_float_color, rasterize_mesh, scratch
 from .ray_raster import rasterize_mesh_rays
 from .rasterize import SourceMaps
 
-__all__ = ["Blended", "blend_sources"]
+__all__ = ["Blended", "blend_sources", "edge_confidence"]
+
+#: Relative inverse-depth jump between neighbouring source pixels that counts as a depth edge.
+EDGE_JUMP = 0.05
+#: Distance (source pixels) from a depth edge over which the confidence ramps from low to 1.
+EDGE_RAMP_PX = 2.0
+
+_conf_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def edge_confidence(mesh) -> np.ndarray:
+    """(H, W) float32 confidence of each source pixel: ``clip(d / EDGE_RAMP_PX, 0.02, 1)`` with d
+    the distance (px) to the nearest pixel on either side of a depth edge of the source
+    (inverse depth jumping by more than ``EDGE_JUMP`` relative, or no depth next to depth).
+
+    Pixels on a silhouette mix foreground and background colour in a real (or anti-aliased)
+    image; with the low weight, a clean pixel of another source wins where one exists. Cached
+    per mesh.
+    """
+    conf = _conf_cache.get(mesh)
+    if conf is None:
+        inv = _mesh_inv_depth(mesh)
+        edge = np.zeros(inv.shape, bool)
+        for axis in (0, 1):
+            a = inv[:-1] if axis == 0 else inv[:, :-1]
+            b = inv[1:] if axis == 0 else inv[:, 1:]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                jump = (np.abs(a - b) > EDGE_JUMP * np.maximum(a, b)) & ((a > 0) | (b > 0))
+            if axis == 0:
+                edge[:-1] |= jump
+                edge[1:] |= jump
+            else:
+                edge[:, :-1] |= jump
+                edge[:, 1:] |= jump
+        if edge.any():
+            dist = cv2.distanceTransform((~edge).astype(np.uint8), cv2.DIST_L2, 3)
+        else:
+            dist = np.full(inv.shape, np.inf, np.float32)
+        conf = np.clip(dist / EDGE_RAMP_PX, 0.02, 1.0).astype(np.float32)
+        conf.setflags(write=False)
+        _conf_cache[mesh] = conf
+    return conf
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +104,8 @@ def _target_shape(camera) -> tuple[int, int]:
 
 
 def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg: float = 10.0,
-                  feather_px: float = 16.0, footprint: str = "free", progress=None) -> Blended:
+                  feather_px: float = 16.0, footprint: str = "free", interpolation: str = "linear",
+                  progress=None) -> Blended:
     """Render and blend N sources into one target camera.
 
     Parameters
@@ -78,6 +122,10 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
         Angular scale of the viewpoint weight ``exp(-(angle / sigma)^2)``.
     feather_px : float
         Width of the weight ramp at each source's image border, in source pixels.
+    footprint : str
+        Clamping of sample positions at quad sides (:func:`ibr.render.rasterize_mesh`).
+    interpolation : {"linear", "cubic"}
+        Colour reconstruction: bilinear, or bicubic (Keys, a = -0.75, as OpenCV's INTER_CUBIC).
     progress : callable, optional
         Called as ``progress(i)`` after source i has been added.
 
@@ -89,6 +137,7 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
     rel_tol = check_positive("rel_tol", rel_tol)
     sigma = np.radians(check_positive("sigma_deg", sigma_deg))
     feather = check_positive("feather_px", feather_px)
+    check_choice("interpolation", interpolation, ("linear", "cubic"))
     if len(sources) == 0:
         raise ValueError("sources: expected at least one (mesh, color) source, got none")
     colors = [as_float_color(c) for _, c in sources]
@@ -110,7 +159,8 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
     maps = SourceMaps(scratch(("blend", "u"), shape, np.float32), scratch(("blend", "v"), shape, np.float32),
                       scratch(("blend", "z"), shape, np.float32), scratch(("blend", "c"), shape, np.bool_))
     incid = scratch(("blend", "i"), shape, np.float32)
-    args = (rel_tol, 1.0 / (sigma * sigma), 1.0 / feather, acc, acc_w, acc_z, front, best_w, best_id)
+    args = (rel_tol, interpolation == "cubic", 1.0 / (sigma * sigma), 1.0 / feather, acc, acc_w, acc_z, front,
+            best_w, best_id)
     for i, ((mesh, _), col) in enumerate(zip(sources, colors)):
         if isinstance(camera, SphericalCamera):
             from .ray_raster import _tables
@@ -118,13 +168,13 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
             region = [0, -1, None]
             rasterize_mesh_rays(mesh, camera, footprint=footprint, out=maps, incidence=incid, _region=region)
             center = (camera.world_from_rig[:3, :3].T @ (mesh.camera.position - camera.world_from_rig[:3, 3]))
-            _k.accumulate_spherical(col, maps.map_u, maps.map_v, maps.depth, incid, _tables(camera, "rows"),
+            _k.accumulate_spherical(col, edge_confidence(mesh), maps.map_u, maps.map_v, maps.depth, incid, _tables(camera, "rows"),
                                     _tables(camera, "cols"), np.ascontiguousarray(center), *region, i, *args)
         else:
             m = rasterize_mesh(mesh, camera, footprint=footprint)
             incid.fill(1.0)  # no per-pixel plane normal on the pinhole path
             center = (camera.cam_from_world @ np.append(mesh.camera.position, 1.0))[:3]
-            _k.accumulate_pinhole(col, m.map_u, m.map_v, m.depth, incid, np.linalg.inv(camera.K),
+            _k.accumulate_pinhole(col, edge_confidence(mesh), m.map_u, m.map_v, m.depth, incid, np.linalg.inv(camera.K),
                                   np.ascontiguousarray(center), i, *args)
         if progress is not None:
             progress(i)

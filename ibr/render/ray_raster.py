@@ -20,17 +20,7 @@ from ..base.ray_camera import SphericalCamera
 from ..base.validate import check_choice, check_image, check_positive
 from . import _ray_kernels as _k
 from ._raster_kernels import bucket_bands
-from .rasterize import (
-    _FAR,
-    FOOTPRINTS,
-    Layer,
-    SourceMaps,
-    _clamp_flags,
-    _intrinsics,
-    _nbands,
-    as_float_color,
-    sample_maps,
-)
+from .rasterize import _FAR, FOOTPRINTS, Layer, SourceMaps, _clamp_flags, _intrinsics, as_float_color, sample_maps
 
 __all__ = ["rasterize_mesh_rays", "render_mesh_rays", "rasterize_mesh_rays_reference"]
 
@@ -94,16 +84,34 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
     flags = _clamp_flags(mesh, footprint, depth_tol)
     if incidence is None:
         incidence = np.empty((h, w), np.float32)
-    start, order = bucket_bands(bbox, h, _nbands(h))
+    start, order = bucket_bands(bbox, h, _bands(h))
     if _region is None:
         v0, v1, colmask = 0, h - 1, np.ones(w, np.uint8)
     else:
         v0, v1, colmask = _k.region(bbox, w, h)
         _region[:] = [v0, v1, colmask]
     _k.raster_rays(mesh.rects, plane_rig, bbox, flags, src_k, rot, tr, _tables(camera, "rows"),
-                   _tables(camera, "cols"), start, order, _FAR, v0, v1, colmask, out.depth, out.map_u, out.map_v,
+                   _tables(camera, "cols"), start, order, _band_order(len(start) - 1), _FAR, v0, v1, colmask, out.depth, out.map_u, out.map_v,
                    out.coverage, incidence)
     return out
+
+
+def _bands(height: int) -> int:
+    """Bands of rows for the parallel raster: 8 per thread (see :func:`_band_order`)."""
+    import numba
+
+    return int(min(height, 8 * numba.get_num_threads()))
+
+
+def _band_order(nbands: int) -> np.ndarray:
+    """Task -> band, interleaved so that each thread's contiguous chunk of tasks spreads over the
+    image (task k of ``per = nbands / T`` per thread renders band ``(k % per) * T + k // per``)."""
+    import numba
+
+    t = max(1, numba.get_num_threads())
+    per = -(-nbands // t)
+    order = [(k % per) * t + k // per for k in range(per * t)]
+    return np.array([b for b in order if b < nbands], np.int64)
 
 
 _TABLES: dict = {}
