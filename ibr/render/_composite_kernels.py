@@ -122,9 +122,10 @@ def _sample_store(src, x, y, out, v, u, is_int, maxval):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _lerp1(src, x0, x1, y0, y1, ax, ay):
-    """Bilinear interpolation of a single-channel (H, W) float32 map."""
-    top = src[y0, x0] + ax * (src[y0, x1] - src[y0, x0])
-    bot = src[y1, x0] + ax * (src[y1, x1] - src[y1, x0])
+    """Bilinear interpolation of channel 0 of an (H, W, 2) float32 trust map (channel 1: the
+    minimum over the 2x2 block starting at each pixel, read first to skip clean blocks)."""
+    top = src[y0, x0, 0] + ax * (src[y0, x1, 0] - src[y0, x0, 0])
+    bot = src[y1, x0, 0] + ax * (src[y1, x1, 0] - src[y1, x0, 0])
     return top + ay * (bot - top)
 
 
@@ -135,8 +136,9 @@ def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel
     (in float32) from the sources sa, sb (any dtype: uint8 sources are read as is, 4x less memory
     traffic than a float32 copy, with identical results) at the maps (ua, va), (ub, vb) only where they are used, so
     no layer color image is ever written. ``single``: only layer a exists. ``use_trust``: the
-    agreeing blend weights are scaled by the source-space trust maps ka, kb (same size as sa,
-    sb), sampled with the same bilinear taps."""
+    agreeing blend weights are scaled by the source-space trust maps ka, kb ((H_s, W_s, 2):
+    trust and its 2x2 block minimum, see ``composite.pack_trust``), sampled with the same
+    bilinear taps where a block holds a mixed pixel."""
     h, w, nc = out.shape
     for v in prange(h):
         for u in range(w):
@@ -152,7 +154,7 @@ def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel
                     p0, p1, p2, p3, pax, pay = _taps(sa, ua[v, u], va[v, u])
                     q0, q1, q2, q3, qax, qay = _taps(sb, ub[v, u], vb[v, u])
                     xa, xb = wa, wb
-                    if use_trust:
+                    if use_trust and (ka[p2, p0, 1] < 1.0 or kb[q2, q0, 1] < 1.0):  # a mixed tap near
                         xa, xb = _trust_weights(wa, wb, _lerp1(ka, p0, p1, p2, p3, pax, pay),
                                                 _lerp1(kb, q0, q1, q2, q3, qax, qay))
                     for ch in range(nc):

@@ -22,8 +22,8 @@ from ..base.validate import check_choice, check_positive
 from ..base.camera import Camera
 from .rasterize import Layer
 
-__all__ = ["COMPOSITE_MODES", "Composite", "composite", "mixed_pixels", "sample_composite", "source_trust",
-           "viewpoint_weights"]
+__all__ = ["COMPOSITE_MODES", "Composite", "composite", "mixed_pixels", "pack_trust", "sample_composite",
+           "source_trust", "viewpoint_weights"]
 
 #: Relative step in inverse depth between 4-neighbours that marks a depth discontinuity (and
 #: that is also ``STEP_RATIO`` times larger than the neighbouring differences on the line).
@@ -32,7 +32,8 @@ STEP_RATIO = 3.0
 #: Trust of a mixed silhouette pixel in the blend (clean pixels: 1).
 MIXED_TRUST = 0.03
 
-_NO_TRUST = np.ones((1, 1), np.float32)
+_NO_TRUST = np.ones((1, 1, 2), np.float32)
+_NO_TRUST_2D = np.ones((1, 1), np.float32)
 
 #: Compositing modes: depth-aware blend (default) and the seed's front/back order.
 COMPOSITE_MODES = ("blend", "front")
@@ -103,6 +104,17 @@ def source_trust(depth, *, mixed_trust: float = MIXED_TRUST) -> np.ndarray:
     t = np.ones(np.shape(depth), np.float32)
     t[mixed_pixels(depth)] = np.float32(mixed_trust)
     return t
+
+
+def pack_trust(trust) -> np.ndarray:
+    """(H, W, 2) float32: the trust map and, per pixel, the minimum over the 2x2 block that
+    starts there (the taps of a bilinear sample whose floor is that pixel; clamped at the
+    border), so the sampler skips the interpolation where all four taps are clean."""
+    t = np.ascontiguousarray(trust, np.float32)
+    m = t.copy()
+    m[:, :-1] = np.minimum(m[:, :-1], t[:, 1:])
+    m[:-1] = np.minimum(m[:-1], m[1:])
+    return np.ascontiguousarray(np.stack([t, m], -1))
 
 
 def viewpoint_weights(camera: Camera, sources) -> np.ndarray:
@@ -187,7 +199,7 @@ def composite(
         order = (0, 1) if w[0] >= w[1] else (1, 0)
         a, b = layers[order[0]], layers[order[1]]
         wa, wb = float(w[order[0]]), float(w[order[1]])
-    ka = kb = _NO_TRUST
+    ka = kb = _NO_TRUST_2D
     use_trust = trust is not None and len(layers) == 2
     if use_trust:
         k = [np.ascontiguousarray(t, np.float32) for t in trust]
@@ -223,8 +235,9 @@ def sample_composite(
     weights, mode, depth_tol, dtype
         As in :func:`composite`.
     trust : sequence of (H_s, W_s) float32 arrays, optional
-        Per source, :func:`source_trust` (source pixel grid); sampled with the colour's
-        bilinear taps, it scales the blend weights where the layers agree.
+        Per source, :func:`source_trust` (source pixel grid; or its :func:`pack_trust`, which
+        callers rendering many frames can cache); sampled with the colour's bilinear taps, it
+        scales the blend weights where the layers agree.
 
     Notes
     -----
@@ -263,9 +276,10 @@ def sample_composite(
     ka = kb = _NO_TRUST
     use_trust = trust is not None and not single
     if use_trust:
-        k = [np.ascontiguousarray(t, np.float32) for t in trust]
-        if len(k) != 2 or any(t.shape != s.shape[:2] for t, s in zip(k, sources)):
+        k = [np.asarray(t, np.float32) for t in trust]
+        if len(k) != 2 or any(t.shape[:2] != s.shape[:2] for t, s in zip(k, sources)):
             raise ValueError("trust: expected one (H_s, W_s) array per source, of the source's size")
+        k = [t if t.ndim == 3 and t.shape[2] == 2 else pack_trust(t) for t in k]
         ka, kb = k[a], k[b]
     _k.sample_composite2(sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u, mb.map_v, mb.depth,
                          single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage,

@@ -35,6 +35,9 @@ __all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous", 
 #: fill ("background"), or none.
 FILLS = ("previous", "inpaint", "background", "none")
 
+#: The pull-push works on the holes' bounding box grown by this many pixels (the context it
+#: reads); few small holes then cost a small pyramid.
+CONTEXT_PX = 64
 #: Pull-push defaults (tuned on the Middlebury motorcycle's disocclusions, docs/edges.md).
 PULLPUSH_POWER = 32.0
 PULLPUSH_EPS = 0.002
@@ -214,8 +217,20 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         raise ValueError(f"mix: expected a number in [0, 1], got {mix!r}")
     holes = np.ascontiguousarray(holes)
     filled = np.zeros(holes.shape, np.bool_)
+    rows, cols = np.flatnonzero(holes.any(axis=1)), np.flatnonzero(holes.any(axis=0))
+    if rows.size == 0:
+        return filled
+    # work on the holes' bounding box plus CONTEXT_PX (few small holes: a small pyramid)
+    v0, v1 = max(rows[0] - CONTEXT_PX, 0), min(rows[-1] + 1 + CONTEXT_PX, holes.shape[0])
+    u0, u1 = max(cols[0] - CONTEXT_PX, 0), min(cols[-1] + 1 + CONTEXT_PX, holes.shape[1])
+    if (v1 - v0) * (u1 - u0) < holes.size:
+        box = (slice(v0, v1), slice(u0, u1))
+        c, z, hb = (np.ascontiguousarray(a[box]) for a in (color, depth, holes))
+        f = _fill_pullpush_inplace(c, z, hb, axis=axis, power=power, eps=eps, smooth=smooth, mix=mix)
+        color[box], depth[box], filled[box] = c, z, f
+        return filled
     zmax = _k.covered_max_depth(depth, holes)
-    if not holes.any() or not zmax > 0:
+    if not zmax > 0:
         return filled
     h, w, nc = color.shape
     squarings = max(int(round(np.log2(power))), 0)
