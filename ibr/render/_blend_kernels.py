@@ -132,8 +132,8 @@ def accumulate_spherical(src, conf, map_u, map_v, rng, incid, rows, cols, center
             if not colmask[u]:
                 continue
             z = rng[v, u]
-            if not (z == z):
-                continue
+            if not (z <= front[v, u] * (1.0 + rel_tol)):
+                continue  # uncovered (NaN) or hidden: no weight to compute
             slon, clon = cols[u, 0], cols[u, 1]
             dx, dy, dz = clat * slon, -slat, clat * clon
             px, py, pz = sr * clon + z * dx, z * dy, -sr * slon + z * dz
@@ -156,8 +156,8 @@ def accumulate_pinhole(src, conf, map_u, map_v, depth, incid, kinv, center, src_
     for v in prange(h):
         for u in range(w):
             z = depth[v, u]
-            if not (z == z):
-                continue
+            if not (z <= front[v, u] * (1.0 + rel_tol)):
+                continue  # uncovered (NaN) or hidden: no weight to compute
             rx = kinv[0, 0] * u + kinv[0, 1] * v + kinv[0, 2]
             ry = kinv[1, 0] * u + kinv[1, 1] * v + kinv[1, 2]
             rz = 1.0
