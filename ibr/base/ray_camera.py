@@ -40,18 +40,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .validate import check_array, check_finite_scalar
+from .camera import _check_pose, _readonly
+from .validate import check_finite_scalar
 
 __all__ = ["SphericalCamera", "EYES"]
 
 #: Eye names and their sign s in the ray origin ``s * r(lat) * right(lon)``.
 EYES = {"mono": 0, "left": -1, "right": 1}
-
-
-def _readonly(a) -> np.ndarray:
-    a = np.array(a, dtype=np.float64, copy=True)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,11 +95,7 @@ class SphericalCamera:
                 f"fade_start_deg, fade_end_deg: expected 0 < start < end <= 90, got {self.fade_start_deg!r}, "
                 f"{self.fade_end_deg!r}"
             )
-        pose = check_array("world_from_rig", self.world_from_rig, shape=(4, 4), dtype_kind="fiu").astype(np.float64)
-        r = pose[:3, :3]
-        if (not np.all(np.isfinite(pose)) or not np.allclose(pose[3], [0, 0, 0, 1], atol=1e-9)
-                or not np.allclose(r @ r.T, np.eye(3), atol=1e-6) or np.linalg.det(r) < 0):
-            raise ValueError("world_from_rig: expected a finite rigid 4x4 pose (proper rotation, last row 0 0 0 1)")
+        pose = _check_pose("world_from_rig", self.world_from_rig)
         object.__setattr__(self, "ipd", ipd)
         object.__setattr__(self, "world_from_rig", _readonly(pose))
 

@@ -265,6 +265,17 @@ def sample_maps(color_f32: np.ndarray, map_u: np.ndarray, map_v: np.ndarray, *, 
     return res[..., None] if res.ndim == 2 else res
 
 
+def source_color(mesh, color) -> np.ndarray:
+    """``color`` checked as the image of ``mesh``'s source camera (1-4 channels, same size)."""
+    col = check_image("color", color, channels=(1, 2, 3, 4))
+    if col.shape[:2] != mesh.camera.shape:
+        raise ValueError(
+            f"color: size {col.shape[1]}x{col.shape[0]} does not match the mesh's source camera "
+            f"{mesh.camera.width}x{mesh.camera.height}"
+        )
+    return col
+
+
 def render_mesh(
     mesh, color, camera: Camera, *, footprint: str = "free", depth_tol: float = 0.01, interpolation: str = "linear"
 ) -> Layer:
@@ -300,12 +311,7 @@ def render_mesh(
     the identity warp that is exactly (10.0, 20.0), so ``render_mesh(mesh, c, mesh.camera)``
     returns ``c`` on every pixel that has a quad.
     """
-    col = check_image("color", color, channels=(1, 2, 3, 4))
-    if col.shape[:2] != mesh.camera.shape:
-        raise ValueError(
-            f"color: size {col.shape[1]}x{col.shape[0]} does not match the mesh's source camera "
-            f"{mesh.camera.width}x{mesh.camera.height}"
-        )
+    col = source_color(mesh, color)
     maps = rasterize_mesh(mesh, camera, footprint=footprint, depth_tol=depth_tol)
     sampled = sample_maps(as_float_color(col), maps.map_u, maps.map_v, interpolation=interpolation)
     return Layer(sampled, maps.depth, maps.coverage)

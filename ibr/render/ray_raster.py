@@ -17,10 +17,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..base.ray_camera import SphericalCamera
-from ..base.validate import check_choice, check_image, check_positive
+from ..base.validate import check_choice, check_positive
 from . import _ray_kernels as _k
 from ._raster_kernels import bucket_bands
-from .rasterize import _FAR, FOOTPRINTS, Layer, SourceMaps, _clamp_flags, _intrinsics, as_float_color, sample_maps
+from .rasterize import (_FAR, FOOTPRINTS, Layer, SourceMaps, _clamp_flags, _intrinsics, as_float_color, sample_maps,
+                        source_color)
 
 __all__ = ["rasterize_mesh_rays", "render_mesh_rays", "rasterize_mesh_rays_reference"]
 
@@ -138,12 +139,7 @@ def render_mesh_rays(mesh, color, camera: SphericalCamera, *, footprint: str = "
     mesh of a pinhole view rendered into the mono equirect camera at the view's own centre gives
     the view's colours at the pixels its frustum covers and NaN range elsewhere.
     """
-    col = check_image("color", color, channels=(1, 2, 3, 4))
-    if col.shape[:2] != mesh.camera.shape:
-        raise ValueError(
-            f"color: size {col.shape[1]}x{col.shape[0]} does not match the mesh's source camera "
-            f"{mesh.camera.width}x{mesh.camera.height}"
-        )
+    col = source_color(mesh, color)
     maps = rasterize_mesh_rays(mesh, camera, footprint=footprint, depth_tol=depth_tol)
     sampled = sample_maps(as_float_color(col), maps.map_u, maps.map_v, interpolation=interpolation)
     return Layer(sampled, maps.depth, maps.coverage)
