@@ -17,7 +17,8 @@ def add_arguments(parser) -> None:
                         help="output colour (.png, .jpg, .exr, .tif); mono: the equirect (or a cubemap strip "
                              "with --layout cube); ODS: both eyes packed by --layout")
     parser.add_argument("--depth-out", metavar="DEPTH.exr",
-                        help="depth output (range along each ray, packed like the colour); default "
+                        help="depth output (range along each ray, packed like the colour; left over right for "
+                             "anaglyph); default "
                              "<output stem>_depth.exr; 'none' to skip")
     parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (255 = no view saw it)")
     parser.add_argument("--width", type=int, default=4096, help="equirect width per eye (even; default 4096)")
