@@ -9,13 +9,16 @@ LAYOUTS = ("top-bottom", "sbs", "cube", "anaglyph")
 
 def add_arguments(parser) -> None:
     parser.add_argument("views", nargs="*", metavar="VIEW.json",
-                        help="posed RGB-D view files (each with depth and a world_from_cam pose)")
+                        help="posed RGB-D view files (each with depth and a world_from_cam pose); or one "
+                             "sequence per rig camera (manifest or folder of numbered views, all of one "
+                             "length): frame k stitches view k of every sequence")
     parser.add_argument("--panorama", nargs=2, metavar=("COLOR", "RANGE"),
                         help="instead of views: one centre RGB-D panorama (equirect colour image and a float "
                              "range map, .exr/.tif/.pfm) -- for --stereo ods from a single capture")
     parser.add_argument("-o", "--output", required=True, metavar="PANO.png",
                         help="output colour (.png, .jpg, .exr, .tif); mono: the equirect (or a cubemap strip "
-                             "with --layout cube); ODS: both eyes packed by --layout")
+                             "with --layout cube); ODS: both eyes packed by --layout. With sequences: a "
+                             "folder receiving pano_NNNN.png (and pano_NNNN_depth.exr)")
     parser.add_argument("--depth-out", metavar="DEPTH.exr",
                         help="depth output (range along each ray, packed like the colour; left over right for "
                              "anaglyph); default "
@@ -65,19 +68,120 @@ def _strip(faces: dict):
     return np.concatenate([faces[n] for n in FACE_NAMES], axis=1)
 
 
-def run(args) -> int:
-    from pathlib import Path
-
+def _stitch_frame(args, views, panorama, tick):
+    """One panorama: ``(packed colour, depth, holes, share seen)`` as the options ask."""
     import numpy as np
 
-    from commands._common import info, progress
-    from commands.interpolate import _to_png
-    from ibr.io import load_view, read_depth, read_image, write_depth, write_image
-    from ibr.io.outputs import DEPTH_EXTS, IMAGE_EXTS, OutputPlan
     from panorama.convert import equirect_to_cubemap
     from panorama.stitch import equirect_camera, ods_from_panorama, ods_from_views, pack_ods, stitch_rgbd
 
+    fill = args.fill or ("background" if panorama else "none")
+    if args.stereo == "ods":
+        kw = dict(ipd=args.ipd, fade_start_deg=args.fade[0], fade_end_deg=args.fade[1], fill=fill, progress=tick)
+        if panorama:
+            pair = ods_from_panorama(*panorama, width=args.width, **kw)
+        else:
+            pair = ods_from_views(views, args.width, center=args.center, **kw)
+        layout = args.layout or "top-bottom"
+        packed = pack_ods(pair, layout)
+        holes = [e.holes for e in pair.eyes]
+        depth = [e.depth for e in pair.eyes]
+        if layout == "cube":
+            s = args.width // 4
+            packed = np.concatenate([_strip(packed[0]), _strip(packed[1])], axis=0)
+            depth = np.concatenate([_strip(equirect_to_cubemap(d, s, layout="dict", depth=True)) for d in depth], 0)
+            holes = np.concatenate([_strip(equirect_to_cubemap(h.astype(np.uint8) * 255, s, layout="dict"))
+                                    for h in holes], 0) > 127
+        elif layout == "sbs":
+            depth, holes = np.concatenate(depth, 1), np.concatenate(holes, 1)
+        else:  # top-bottom, and anaglyph's masks/depths stacked left over right
+            depth, holes = np.concatenate(depth, 0), np.concatenate(holes, 0)
+        return packed, depth, holes, 1 - np.mean([e.holes.mean() for e in pair.eyes])
+    center = args.center if args.center is not None else np.mean([v.camera.position for v in views], axis=0)
+    res = stitch_rgbd(views, equirect_camera(args.width, center=center), progress=tick)
+    packed, depth, holes = res.color, res.depth, res.holes
+    if fill == "background" and holes.any():
+        from ibr.render.fill import fill_background
+
+        c3 = packed if packed.ndim == 3 else packed[..., None]
+        packed, depth, _ = fill_background(c3, depth, holes)
+    if args.layout == "cube":
+        s = args.width // 4
+        packed = _strip(equirect_to_cubemap(packed, s, layout="dict"))
+        depth = _strip(equirect_to_cubemap(depth, s, layout="dict", depth=True))
+        holes = _strip(equirect_to_cubemap(holes.astype(np.uint8) * 255, s, layout="dict")) > 127
+    return packed, depth, holes, 1 - holes.mean()
+
+
+def _write(plan, out, dep, holes_out, packed, depth, holes) -> None:
+    import numpy as np
+
+    from commands.interpolate import _to_png
+    from ibr.io import write_depth, write_image
+
+    if out.suffix.lower() in (".png", ".jpg", ".jpeg"):
+        packed = _to_png(packed)
+    elif packed.dtype == np.uint8 and out.suffix.lower() in (".exr", ".pfm"):
+        packed = packed.astype(np.float32) / 255
+    write_image(out, packed)
+    if dep:
+        write_depth(dep, depth.astype(np.float32))
+    if holes_out:
+        write_image(holes_out, holes.astype(np.uint8) * 255)
+
+
+def _describe(args, n, seen, panorama) -> str:
+    fill = args.fill or ("background" if panorama else "none")
+    return (f"{n} {'cube faces of the panorama' if panorama else 'views'}, "
+            f"{'ODS ' + (args.layout or 'top-bottom') if args.stereo == 'ods' else 'mono'}, "
+            f"seen {seen:.2%} of the sphere (holes {1 - seen:.2%}{', filled' if fill != 'none' else ''})")
+
+
+def _run_sequences(args) -> int:
+    """One rig camera per sequence: frame k stitches view k of every sequence into -o FOLDER."""
+    from commands._common import info, progress
+    from ibr.io import load_view
+    from ibr.io.outputs import OutputPlan
+    from ibr.sequence import load_sequence
+
+    if args.panorama or args.holes_out or (args.depth_out not in (None, "none")):
+        raise ValueError("VIEW.json: with sequences, -o is a folder of pano_NNNN.png (+ pano_NNNN_depth.exr "
+                         "unless --depth-out none); --panorama, --holes-out and a --depth-out path do not apply")
+    seqs = [load_sequence(p) for p in args.views]
+    lengths = {len(s.views) for s in seqs}
+    if len(lengths) != 1:
+        raise ValueError(f"VIEW.json: every rig sequence needs the same number of frames, got "
+                         f"{', '.join(f'{s.source}: {len(s.views)}' for s in seqs)}")
+    frames = lengths.pop()
+    depth = args.depth_out != "none"
+    with OutputPlan("ibr stitch", log=info) as plan:
+        for s in seqs:
+            for v in s.views:
+                plan.add_view_input("VIEW", v)
+        folder = plan.add_folder("-o", args.output, ("pano_*.png",) + (("pano_*_depth.exr",) if depth else ()))
+        plan.check()
+        for k in progress(range(frames), frames, "stitch frames"):
+            views = [load_view(s.views[k]) for s in seqs]
+            packed, z, holes, seen = _stitch_frame(args, views, None, None)
+            _write(plan, plan.stage(folder, f"pano_{k:04d}.png"),
+                   plan.stage(folder, f"pano_{k:04d}_depth.exr") if depth else None, None, packed, z, holes)
+        info(f"stitch: {frames} frames of {_describe(args, len(seqs), seen, False)} (last frame)")
+        plan.commit()
+    info(f"wrote {frames} panoramas to {args.output}/")
+    return 0
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from commands._common import info, progress
+    from ibr.io import load_view, read_depth, read_image
+    from ibr.io.outputs import DEPTH_EXTS, IMAGE_EXTS, OutputPlan
+    from ibr.sequence import is_sequence
+
     _check_args(args)
+    if args.views and all(is_sequence(v) for v in args.views):
+        return _run_sequences(args)
     out_path = Path(args.output)
     depth_arg = args.depth_out or str(out_path.with_name(out_path.stem + "_depth.exr"))
     with OutputPlan("ibr stitch", log=info) as plan:
@@ -92,65 +196,19 @@ def run(args) -> int:
         plan.check()  # every output checked before any work
 
         if args.panorama:
-            color = read_image(args.panorama[0], what="--panorama COLOR")
-            rng = read_depth(args.panorama[1], what="--panorama RANGE")
+            panorama = (read_image(args.panorama[0], what="--panorama COLOR"),
+                        read_depth(args.panorama[1], what="--panorama RANGE"))
             views, n = None, 6
         else:
-            views = [load_view(p) for p in args.views]
+            panorama, views = None, [load_view(p) for p in args.views]
             n = len(views)
-        fill = args.fill or ("background" if args.panorama else "none")
         steps = n * (2 if args.stereo == "ods" else 1)
         bar = progress(range(steps), steps, "stitch")
         next(bar)  # the bar prints step k when asked for item k + 1 (one step per rendered view)
-        tick = lambda i: next(bar, None)  # noqa: E731
-        if args.stereo == "ods":
-            kw = dict(ipd=args.ipd, fade_start_deg=args.fade[0], fade_end_deg=args.fade[1], fill=fill, progress=tick)
-            if views is None:
-                pair = ods_from_panorama(color, rng, width=args.width, **kw)
-            else:
-                pair = ods_from_views(views, args.width, center=args.center, **kw)
-            layout = args.layout or "top-bottom"
-            packed = pack_ods(pair, layout)
-            holes = [e.holes for e in pair.eyes]
-            depth = [e.depth for e in pair.eyes]
-            if layout == "cube":
-                s = args.width // 4
-                packed = np.concatenate([_strip(packed[0]), _strip(packed[1])], axis=0)
-                depth = np.concatenate([_strip(equirect_to_cubemap(d, s, layout="dict", depth=True)) for d in depth], 0)
-                holes = np.concatenate([_strip(equirect_to_cubemap(h.astype(np.uint8) * 255, s, layout="dict"))
-                                        for h in holes], 0) > 127
-            elif layout == "sbs":
-                depth, holes = np.concatenate(depth, 1), np.concatenate(holes, 1)
-            else:  # top-bottom, and anaglyph's masks/depths stacked left over right
-                depth, holes = np.concatenate(depth, 0), np.concatenate(holes, 0)
-            saw = 1 - np.mean([e.holes.mean() for e in pair.eyes])
-        else:
-            center = args.center if args.center is not None else np.mean([v.camera.position for v in views], axis=0)
-            res = stitch_rgbd(views, equirect_camera(args.width, center=center), progress=tick)
-            packed, depth, holes = res.color, res.depth, res.holes
-            if fill == "background" and holes.any():
-                from ibr.render.fill import fill_background
-
-                c3 = packed if packed.ndim == 3 else packed[..., None]
-                packed, depth, _ = fill_background(c3, depth, holes)
-            if args.layout == "cube":
-                s = args.width // 4
-                packed = _strip(equirect_to_cubemap(packed, s, layout="dict"))
-                depth = _strip(equirect_to_cubemap(depth, s, layout="dict", depth=True))
-                holes = _strip(equirect_to_cubemap(holes.astype(np.uint8) * 255, s, layout="dict")) > 127
-            saw = 1 - holes.mean()
-        info(f"stitch: {n} {'views' if views is not None else 'cube faces of the panorama'}, "
-             f"{'ODS ' + (args.layout or 'top-bottom') if args.stereo == 'ods' else 'mono'}, "
-             f"seen {saw:.2%} of the sphere (holes {1 - saw:.2%}{', filled' if fill != 'none' else ''})")
-        if out.suffix.lower() in (".png", ".jpg", ".jpeg"):
-            packed = _to_png(packed)
-        elif packed.dtype == np.uint8 and out.suffix.lower() in (".exr", ".pfm"):
-            packed = packed.astype(np.float32) / 255
-        write_image(plan.stage(out), packed)
-        if dep:
-            write_depth(plan.stage(dep), depth.astype(np.float32))
-        if holes_out:
-            write_image(plan.stage(holes_out), holes.astype(np.uint8) * 255)
+        packed, depth, holes, seen = _stitch_frame(args, views, panorama, lambda i: next(bar, None))
+        info(f"stitch: {_describe(args, n, seen, panorama is not None)}")
+        _write(plan, plan.stage(out), dep and plan.stage(dep), holes_out and plan.stage(holes_out), packed, depth,
+               holes)
         written = plan.commit()
     info(f"wrote {', '.join(map(str, written))}")
     return 0

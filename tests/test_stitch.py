@@ -307,3 +307,29 @@ def test_cli_stitch_refuses_views_without_depth_or_pose(tmp_path, capsys):
     before = (DATA_DIR / "rig" / "rig_00_color.png").read_bytes()
     assert cli.main(["stitch", *RIG, "-o", str(DATA_DIR / "rig" / "rig_00_color.png"), "--width", "64"]) == 1
     assert (DATA_DIR / "rig" / "rig_00_color.png").read_bytes() == before
+
+
+def test_cli_stitch_over_rig_sequences(tmp_path, capsys):
+    """One sequence per rig camera: frame k stitches view k of each; a static rig gives the
+    single-frame panorama at every frame."""
+    import json
+
+    seqs = []
+    for i, view in enumerate(RIG):
+        doc = {"format": "ibr-sequence", "version": 1, "name": f"cam{i}", "views": [view, view]}
+        path = tmp_path / f"cam{i}.json"
+        path.write_text(json.dumps(doc))
+        seqs.append(str(path))
+    out = tmp_path / "frames"
+    assert cli.main(["stitch", *seqs, "-o", str(out), "--width", "128"]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["pano_0000.png", "pano_0000_depth.exr", "pano_0001.png", "pano_0001_depth.exr"]
+    single = tmp_path / "one.png"
+    assert cli.main(["stitch", *RIG, "-o", str(single), "--width", "128"]) == 0
+    assert np.array_equal(read_image(out / "pano_0001.png"), read_image(single))
+    short = tmp_path / "short.json"
+    short.write_text(json.dumps({"format": "ibr-sequence", "version": 1, "views": [RIG[0]]}))
+    capsys.readouterr()
+    assert cli.main(["stitch", *seqs[:2], str(short), "-o", str(tmp_path / "f2"), "--width", "64"]) == 1
+    assert "same number of frames" in capsys.readouterr().err
+    assert not (tmp_path / "f2").exists()
