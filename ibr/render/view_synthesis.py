@@ -99,6 +99,7 @@ class _Source:
         self._depth = view.depth
         self.meshes: dict = {}
         self._trust: dict = {}
+        self.median_depth = None
 
     def trust(self, mesh_key) -> np.ndarray:
         """(H, W, 2) float32 :func:`~ibr.render.composite.source_trust` of the source (mixed
@@ -171,11 +172,9 @@ def lod_baseline(view: View, cameras) -> float:
     level grid (``2^(k/2)``) so that nearby calls share one cached mesh, and at least 5 % of
     the median depth (issue 4's default; see :data:`_MIN_BASELINE_FRACTION`). Parallax is ``f * b / z`` pixels for a move ``b``, so a mesh whose planes
     are within ``max_error_px / (f b)`` in 1/z is within ``max_error_px`` in every target."""
-    from ..mesh.segment import _median_depth
-
     c = view.camera.position
     b = max(float(np.linalg.norm(cam.position - c)) for cam in cameras)
-    floor = _MIN_BASELINE_FRACTION * _median_depth(view.depth)
+    floor = _MIN_BASELINE_FRACTION * _median_depth_of(view)
     if not b > floor:
         return floor
     k = np.ceil(_LOD_STEPS_PER_OCTAVE * np.log2(b))
@@ -194,9 +193,13 @@ def _lod_options(view: View, cameras, mesh_options: dict, lod: str) -> dict:
 
 
 def _median_depth_of(view: View) -> float:
-    from ..mesh.segment import _median_depth
+    """The median depth of a source (the default baseline's reference), computed once per view."""
+    src = _source(view)
+    if src.median_depth is None:
+        from ..mesh.segment import _median_depth
 
-    return _median_depth(view.depth)
+        src.median_depth = _median_depth(view.depth)
+    return src.median_depth
 
 
 def _check_source(view, name: str) -> None:
