@@ -12,8 +12,8 @@ camera lies on the side ``n . X < off``. A pixel's ray meets the plane at
 the rect's half-open pixel-edge outline (the same fill rule as the pinhole rasterizer), and ``t``
 beats the z-buffer (range along the unit ray).
 
-Conservative bounds: each quad's outline is sampled along its four edges (spacing <= 1 px in the
-target), projected with the camera's inverse, unwrapped across the +-180 deg seam and padded;
+Conservative bounds: each quad's outline is sampled along its four edges (spacing <= 3 px of angle
+at the equator's scale), projected with the camera's inverse, unwrapped across the +-180 deg seam and padded;
 quads over a pole (the vertical ray from the rig centre hits them) span all columns up to that
 pole's row.
 """
@@ -27,7 +27,7 @@ from numba import njit, prange
 
 __all__: list[str] = []
 
-_PAD = 0.75  # pixels of slack around the sampled outline (curvature between samples <= 1 px apart)
+_PAD = 1.0  # pixels of slack around the sampled outline (the curve's sagitta between samples <= 3 px apart)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -157,7 +157,7 @@ def _setup_rays(rects, planes, src_k, rot, tr, sign, r0, fa, fb, width, height, 
             lb = math.sqrt(bx * bx + by * by + bz * bz)
             cosang = (ax * bx + ay * by + az * bz) / max(la * lb, 1e-300)
             ang = math.acos(min(1.0, max(-1.0, cosang)))
-            n = int(min(4096.0, ang * width / (2.0 * math.pi))) + 1
+            n = int(min(4096.0, ang * width / (2.0 * math.pi) / 3.0)) + 1
             for i in range(n):
                 s = i / n
                 # the edge is straight in the source image and on the plane: interpolate in
@@ -330,6 +330,44 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
                 a, b = ulo, uhi
                 if narrow and sr == 0.0:
                     a, b = _row_span(forms, slat, clat, ulo, uhi, width)
+                    # rays from the rig centre: X_s = (off / n.d) M d, so the source pixel is the
+                    # projection of M d (a homography of the direction), t = off / n.d
+                    k0x, k0y, k0z = -slat * m[0, 1], -slat * m[1, 1], -slat * m[2, 1]
+                    kn = -slat * ny
+                    for uw in range(a, b + 1):
+                        u = uw if uw < width else uw - width
+                        if u < 0:
+                            u += width
+                        sx, sz = clat * cols[u, 0], clat * cols[u, 1]
+                        nd = nx * sx + nz * sz + kn
+                        if not (nd > 0.0):
+                            continue
+                        t = off / nd
+                        if not (t < rng[v, u]):
+                            continue
+                        xs = m[0, 0] * sx + m[0, 2] * sz + k0x
+                        ys = m[1, 0] * sx + m[1, 2] * sz + k0y
+                        zs = m[2, 0] * sx + m[2, 2] * sz + k0z
+                        if not (zs > 0.0):
+                            continue
+                        iz = 1.0 / zs
+                        us = fx * xs * iz + cx
+                        vs = fy * ys * iz + cy
+                        if not (us >= eu0 and us < eu1 and vs >= ev0 and vs < ev1):
+                            continue
+                        if cl and us < su0:
+                            us = su0
+                        if cr and us > su1:
+                            us = su1
+                        if ct and vs < sv0:
+                            vs = sv0
+                        if cb and vs > sv1:
+                            vs = sv1
+                        rng[v, u] = t
+                        incid[v, u] = inv_nn * nd / (off * math.sqrt(xs * xs + ys * ys + zs * zs))
+                        map_u[v, u] = us
+                        map_v[v, u] = vs
+                    continue
                 for uw in range(a, b + 1):
                     u = uw if uw < width else uw - width
                     if u < 0:

@@ -25,7 +25,7 @@ from .rasterize import (_FAR, FOOTPRINTS, Layer, SourceMaps, _clamp_flags, _intr
 
 __all__ = ["rasterize_mesh_rays", "render_mesh_rays", "rasterize_mesh_rays_reference"]
 
-_PARALLEL_QUADS = 4096
+_PARALLEL_QUADS = 256  # quads (each sampled along its outline) above which setup runs on all threads
 
 
 def _check_camera(camera) -> SphericalCamera:
