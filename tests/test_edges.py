@@ -202,6 +202,16 @@ def test_hole_touching_the_border_is_filled_exactly_and_deterministically():
     c, d, f = fill_pullpush(np.zeros((4, 5, 3), np.uint8), np.full((4, 5), np.nan, np.float32),
                             np.ones((4, 5), bool))
     assert not f.any()  # nothing covered: nothing invented
+    # whole rows of holes at the bottom with row-wise parallax: the directional half falls back
+    # to the columns, so the strip continues the row above it (texture varies along the row)
+    holes = np.zeros((h, w), bool)
+    holes[-3:] = True
+    z = np.where(holes, np.nan, 3.0).astype(np.float32)
+    both, _, fb = fill_pullpush(col, z, holes, axis=0)
+    smooth, _, _ = fill_pullpush(col, z, holes, axis=0, mix=0.0)
+    above = col[-4].astype(float)
+    assert fb[holes].all()
+    assert np.abs(both[-3:].astype(float) - above).mean() < 0.8 * np.abs(smooth[-3:].astype(float) - above).mean()
 
 
 def test_pullpush_fill_has_no_streaks():

@@ -166,7 +166,8 @@ def fill_pullpush(color, depth, holes, *, axis: int = 0, power: float = PULLPUSH
         (off by default: with the directional half it scored 0.05 dB lower on the motorcycle).
     mix : float
         Share of the directional background fill along ``axis`` (each run of hole pixels takes
-        the farther of its two neighbours on the axis, as :func:`fill_background_rows`), smoothed
+        the farther of its two neighbours on the axis, as :func:`fill_background_rows`; along
+        the other axis where a whole line is a hole, e.g. a strip at the border), smoothed
         across the axis by a 9-tap binomial (sigma 1.4 px) so that it shows no streaks, in the
         written colour (0: pull-push only).
 
@@ -263,10 +264,14 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
     direct = _ONE_PIXEL
     if mix > 0:  # background side along the parallax axis (rows or columns) ...
         direct = color.copy()  # the source dtype: uint8 filters fastest, values are copies
-        if axis == 1:
-            _k.axis_background(color.transpose(1, 0, 2), depth.T, holes.T, direct.transpose(1, 0, 2), direct_ok.T)
-        else:
-            _k.axis_background(color, depth, holes, direct, direct_ok)
+        _axis_fill(color, depth, holes, axis, direct, direct_ok)
+        lack = holes & ~direct_ok
+        if lack.any():  # whole lines of holes along the axis (a strip at the border): the other axis
+            other, other_ok = color.copy(), np.zeros((h, w), np.bool_)
+            _axis_fill(color, depth, holes, 1 - axis, other, other_ok)
+            take = lack & other_ok
+            direct[take] = other[take]
+            direct_ok |= take
         # ... smoothed across the axis (binomial, sigma 1.4 px), so that neighbouring rows copied
         # from different pixels do not show as streaks; outside the holes it reads the image
         one = np.ones(1, np.float32)
@@ -274,6 +279,14 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         direct = cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc)
     _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, color.dtype.kind in "ui", filled)
     return filled
+
+
+def _axis_fill(color, depth, holes, axis, out, ok):
+    """:func:`_fill_kernels.axis_background` along rows (axis 0) or columns (axis 1)."""
+    if axis == 1:
+        _k.axis_background(color.transpose(1, 0, 2), depth.T, holes.T, out.transpose(1, 0, 2), ok.T)
+    else:
+        _k.axis_background(color, depth, holes, out, ok)
 
 
 def fill_background_rows(color, depth, coverage) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
