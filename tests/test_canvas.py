@@ -270,6 +270,16 @@ def test_composite_into_warp_renderings_and_uint8_exact_copy():
         composite_into(np.zeros((4, 4, 3), np.float32), cam, c)
 
 
+def test_public_names_are_functions_after_the_modules_load():
+    import importlib
+
+    import ibr.canvas
+
+    importlib.import_module("ibr.canvas.compositor")
+    assert callable(ibr.canvas.composite) and ibr.canvas.composite.__module__ == "ibr.canvas.compositor"
+    assert ibr.canvas.pick_pixel.__module__ == "ibr.canvas.pick"
+
+
 def test_canvas_crossing_the_camera_plane_and_behind():
     cam = Camera.from_fov(80, 60, hfov_deg=90)
     floor = Canvas((0, 1, 0), (0, -1, 0), (4, 4), up=(0, 0, 1), resolution=(40, 40))  # under and around the camera

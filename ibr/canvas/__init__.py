@@ -8,7 +8,7 @@ and renderings with the canvases composited in (:func:`composite`: one homograph
 pinhole targets, alpha blending, occlusion by the scene depth). :mod:`~ibr.canvas.plane` (the
 canvas and its exact world <-> pixel mapping), :mod:`~ibr.canvas.resample` (images, the seed's
 power-of-two texture with corrected scale factors), :mod:`~ibr.canvas.video`,
-:mod:`~ibr.canvas.strokes`, :mod:`~ibr.canvas.pick`, :mod:`~ibr.canvas.composite` (+ its numba
+:mod:`~ibr.canvas.strokes`, :mod:`~ibr.canvas.pick`, :mod:`~ibr.canvas.compositor` (+ its numba
 kernel). Panorama targets (equirect, cubemap) are in :mod:`panorama.canvas`. Imports
 :mod:`ibr.base`, :mod:`ibr.mesh` and :mod:`ibr.render`.
 """
@@ -34,9 +34,9 @@ _EXPORTS = {
     "pick_ray": "pick",
     "pick_rays": "pick",
     "camera_rays": "pick",
-    "composite": "composite",
-    "composite_into": "composite",
-    "composite_rays_into": "composite",
+    "composite": "compositor",
+    "composite_into": "compositor",
+    "composite_rays_into": "compositor",
 }
 
 __getattr__, __dir__, __all__ = lazy_exports(__name__, _EXPORTS)

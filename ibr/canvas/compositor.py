@@ -34,7 +34,7 @@ from ..base.camera import Camera
 from ..base.validate import check_image, check_positive
 from ..base.view import View
 from ..render.view_synthesis import Rendering
-from . import _composite_kernels as _k
+from . import _compositor_kernels as _k
 from .plane import Canvas
 
 __all__ = ["composite", "composite_into", "composite_rays_into", "projected_bbox"]
