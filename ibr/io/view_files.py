@@ -200,10 +200,10 @@ def load_view(path) -> View:
         raise ValueError(f"{where}: expected a JSON object, got {type(doc).__name__}")
     if doc.get("format") != VIEW_FORMAT:
         raise ValueError(f"{where}: 'format' must be {VIEW_FORMAT!r}, got {doc.get('format')!r}")
+    check_keys(where, doc, VIEW_KEYS)  # unknown keys ("dpeth", "pose") are refused, never ignored (#12)
     version = doc.get("version")
     if isinstance(version, bool) or version != VIEW_VERSION:
         raise ValueError(f"{where}: unsupported 'version' {version!r} (this reader knows {VIEW_VERSION})")
-    check_keys(where, doc, VIEW_KEYS)  # unknown keys ("dpeth", "pose") are refused, never ignored (#12)
     for key in ("color", "camera"):
         if key not in doc:
             raise ValueError(f"{where}: missing key {key!r}")
