@@ -42,6 +42,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--force", action="store_true",
                         help="with --site: use a non-empty folder, replacing only the viewer's files there")
     parser.add_argument("--face-size", type=image_side, default=None, help="face size for --serve")
+    parser.add_argument("--stereo", choices=("none", "top-bottom", "sbs"), default="none",
+                        help="PANO is an ODS pair (ibr stitch --stereo ods): left eye on top (top-bottom) or "
+                        "left | right (sbs); stills and tours show both eyes as --stereo-out")
+    parser.add_argument("--stereo-out", choices=("anaglyph", "sbs"), default="anaglyph",
+                        help="how a stereo still/tour shows the eyes: red-cyan anaglyph (default) or side by side")
 
 
 def _write_animation(path: Path, frames, fps: float) -> None:
@@ -66,6 +71,29 @@ def _write_animation(path: Path, frames, fps: float) -> None:
             for f in bgr:
                 writer.write(f)
             writer.release()
+
+
+def split_stereo(pano, mode: str):
+    """(left, right) equirect eyes of an ODS pair packed ``top-bottom`` (left on top) or ``sbs``."""
+    import numpy as np
+
+    a = np.asarray(pano)
+    if not isinstance(a, np.ndarray) or a.ndim not in (2, 3):
+        raise ValueError("PANO: --stereo needs one packed equirect image (not cube faces)")
+    h, w = a.shape[:2]
+    if mode == "top-bottom":
+        if h % 2 or w != h:
+            raise ValueError(f"PANO: a top-bottom ODS pair of 2:1 eyes is square (W = H, H even), got {w}x{h}")
+        return a[: h // 2], a[h // 2:]
+    if w % 2 or w != 4 * h:
+        raise ValueError(f"PANO: a side-by-side ODS pair of 2:1 eyes is 4:1 (W = 4 H), got {w}x{h}")
+    return a[:, : w // 2], a[:, w // 2:]
+
+
+def _show_pair(left, right, how: str):
+    from ibr.stereo.pair import pack_stereo
+
+    return pack_stereo(left, right, "anaglyph" if how == "anaglyph" else "sbs")
 
 
 def _serve(args, pano, layout) -> int:
@@ -116,8 +144,10 @@ def run(args) -> int:
     from ibr.io import write_image
     from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
     from panorama.files import read_panorama
-    from panorama.viewer import check_site_folder, to_uint8, tour_views
+    from panorama.viewer import check_site_folder, to_uint8, tour_views  # noqa: F401
 
+    if args.serve and args.stereo != "none":
+        raise ValueError("--stereo: the web viewer shows mono panoramas; use a still or --tour (issue #18)")
     if args.serve:
         if args.site is not None:
             check_site_folder(args.site, force=args.force)  # before reading anything (#12)
@@ -139,11 +169,22 @@ def run(args) -> int:
         else:
             image = plan.add_file("-o", out, IMAGE_EXTS)
         plan.check()  # every output checked before any work (#12)
-        pano, layout = read_panorama(args.pano, layout=args.layout)
+        if args.stereo != "none":
+            from ibr.io import read_image
+
+            eyes = split_stereo(read_image(args.pano, what="PANO"), args.stereo)
+            pano, layout = eyes[0], "equirect"
+        else:
+            eyes, (pano, layout) = None, read_panorama(args.pano, layout=args.layout)
         if args.tour is not None:
             kept = []
-            views = tour_views(pano, args.tour, pitch_deg=args.pitch, fov_deg=args.fov, width=args.width,
-                               height=args.height, layout=layout, start_yaw_deg=args.yaw)
+            kw = dict(pitch_deg=args.pitch, fov_deg=args.fov, width=args.width, height=args.height, layout=layout,
+                      start_yaw_deg=args.yaw)
+            if eyes is None:
+                views = tour_views(pano, args.tour, **kw)
+            else:
+                views = (_show_pair(to_uint8(a), to_uint8(b), args.stereo_out)
+                         for a, b in zip(tour_views(eyes[0], args.tour, **kw), tour_views(eyes[1], args.tour, **kw)))
             for k, view in enumerate(progress(views, args.tour, "tour")):
                 frame = to_uint8(view)
                 write_image(plan.stage(frames, f"frame_{k:04d}.png"), frame)
@@ -153,8 +194,13 @@ def run(args) -> int:
             plan.commit()
             info(f"view: {args.tour} frames in {frames_dir}" + (f", animation {out}" if anim else ""))
             return 0
-        view = panorama.perspective(pano, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll,
-                                    fov_deg=args.fov, width=args.width, height=args.height, layout=layout)
+        kw = dict(yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov, width=args.width,
+                  height=args.height, layout=layout)
+        if eyes is None:
+            view = panorama.perspective(pano, **kw)
+        else:  # an ODS pair: each eye's view, shown as anaglyph or side by side
+            view = _show_pair(to_uint8(panorama.perspective(eyes[0], **kw)),
+                              to_uint8(panorama.perspective(eyes[1], **kw)), args.stereo_out)
         if out.suffix.lower() in (".jpg", ".jpeg") or (out.suffix.lower() == ".png" and view.dtype.kind == "f"):
             view = to_uint8(view)
         write_image(plan.stage(image), view)

@@ -333,3 +333,23 @@ def test_cli_stitch_over_rig_sequences(tmp_path, capsys):
     assert cli.main(["stitch", *seqs[:2], str(short), "-o", str(tmp_path / "f2"), "--width", "64"]) == 1
     assert "same number of frames" in capsys.readouterr().err
     assert not (tmp_path / "f2").exists()
+
+
+def test_cli_view_shows_an_ods_pair_as_anaglyph(tmp_path, capsys):
+    import panorama
+    from panorama.viewer import to_uint8
+
+    ods = tmp_path / "ods.png"
+    assert cli.main(["stitch", *RIG, "-o", str(ods), "--stereo", "ods", "--width", "256", "--depth-out", "none"]) == 0
+    pair = read_image(ods)
+    out = tmp_path / "ana.png"
+    assert cli.main(["view", str(ods), "--stereo", "top-bottom", "-o", str(out), "--yaw", "30", "--width", "96",
+                     "--height", "64"]) == 0
+    ana = read_image(out)
+    kw = dict(yaw_deg=30.0, pitch_deg=0.0, fov_deg=90.0, width=96, height=64, layout="equirect")
+    left = to_uint8(panorama.perspective(pair[:128], **kw))
+    right = to_uint8(panorama.perspective(pair[128:], **kw))
+    assert np.array_equal(ana[..., 0], left[..., 0]) and np.array_equal(ana[..., 1:], right[..., 1:])
+    assert not np.array_equal(left, right)  # the eyes differ (parallax)
+    assert cli.main(["view", str(ods), "--stereo", "sbs", "-o", str(tmp_path / "x.png")]) == 1
+    assert "4:1" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
