@@ -276,6 +276,20 @@ def _row_span(forms, slat, clat, ulo, uhi, width):
     return max(a, ulo), min(b, uhi)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _clamp(us, vs, cl, ct, cr, cb, su0, sv0, su1, sv1):
+    """Clamp a sample position to the rect's outer pixel centres on the flagged sides."""
+    if cl and us < su0:
+        us = su0
+    if cr and us > su1:
+        us = su1
+    if ct and vs < sv0:
+        vs = sv0
+    if cb and vs > sv1:
+        vs = sv1
+    return us, vs
+
+
 def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band_start, band_quads, band_order,
                  far_coord, v0, v1, colmask, rng, map_u, map_v, coverage, incid):
     """Z-buffered ray casting of quads into a spherical camera, one band of rows per task.
@@ -355,14 +369,7 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
                         vs = fy * ys * iz + cy
                         if not (us >= eu0 and us < eu1 and vs >= ev0 and vs < ev1):
                             continue
-                        if cl and us < su0:
-                            us = su0
-                        if cr and us > su1:
-                            us = su1
-                        if ct and vs < sv0:
-                            vs = sv0
-                        if cb and vs > sv1:
-                            vs = sv1
+                        us, vs = _clamp(us, vs, cl, ct, cr, cb, su0, sv0, su1, sv1)
                         rng[v, u] = t
                         incid[v, u] = inv_nn * nd / (off * math.sqrt(xs * xs + ys * ys + zs * zs))
                         map_u[v, u] = us
@@ -394,14 +401,7 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
                     vs = fy * ys / zs + cy
                     if not (us >= eu0 and us < eu1 and vs >= ev0 and vs < ev1):
                         continue
-                    if cl and us < su0:
-                        us = su0
-                    if cr and us > su1:
-                        us = su1
-                    if ct and vs < sv0:
-                        vs = sv0
-                    if cb and vs > sv1:
-                        vs = sv1
+                    us, vs = _clamp(us, vs, cl, ct, cr, cb, su0, sv0, su1, sv1)
                     rng[v, u] = t
                     incid[v, u] = inv_nn / math.sqrt(xs * xs + ys * ys + zs * zs)  # n_cam . X_s = 1
                     map_u[v, u] = us
