@@ -26,6 +26,7 @@ COMMANDS = [
     ("canvas", "canvas"),
     ("batch", "batch"),
     ("stitch-photos", "stitch_photos"),
+    ("import", "import_data"),
 ]
 
 
