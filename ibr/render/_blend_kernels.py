@@ -8,13 +8,14 @@ the weighted sum, a farther one is hidden. Colour is sampled bilinearly at the s
 to the image) only where a source covers the pixel.
 
 Weight of a sample (all factors in [0, 1]):
-``w = incidence**2 * exp(-(angle / sigma)**2) * min(1, border_px / feather) * confidence`` with angle^2 taken as
+``w = prior * exp(-(angle / sigma)**2) * min(1, border_px / feather)`` with angle^2 taken as
 ``2 (1 - cos angle)``, ``angle`` the angle
 at the surface point between the target ray and the ray from the source camera's centre,
-``incidence`` the cosine between the source ray and the surface normal, ``border_px`` the
-distance of the sample from the source image's border (feathering hides where a source ends),
-``confidence`` the source pixel's distance from its own depth edges (mixed fg/bg pixels lose to a
-clean pixel of another source).
+``border_px`` the distance of the sample from the source image's border (feathering hides where a
+source ends), and ``prior`` the source's own weight (bilinear; see
+``ibr.render.blend.source_prior``): incidence^2 (the cosine between the source ray and its quad's
+plane normal) times its confidence (distance from its own depth edges: mixed fg/bg pixels lose to
+a clean pixel of another source).
 A tiny floor keeps every covering sample's weight positive so no covered pixel becomes a hole.
 """
 
@@ -43,6 +44,23 @@ def _bilinear(src, x, y, ch):
     y1 = min(max(int(fy0) + 1, 0), h - 1)
     top = src[y0, x0, ch] * (1.0 - ax) + src[y0, x1, ch] * ax
     bot = src[y1, x0, ch] * (1.0 - ax) + src[y1, x1, ch] * ax
+    return top * (1.0 - ay) + bot * ay
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _bilinear2(src, x, y):
+    """Bilinear sample of a 2-D array (pixel centres at integers; taps clamped to the image)."""
+    h, w = src.shape
+    fx0 = math.floor(x)
+    fy0 = math.floor(y)
+    ax = x - fx0
+    ay = y - fy0
+    x0 = min(max(int(fx0), 0), w - 1)
+    x1 = min(max(int(fx0) + 1, 0), w - 1)
+    y0 = min(max(int(fy0), 0), h - 1)
+    y1 = min(max(int(fy0) + 1, 0), h - 1)
+    top = src[y0, x0] * (1.0 - ax) + src[y0, x1] * ax
+    bot = src[y1, x0] * (1.0 - ax) + src[y1, x1] * ax
     return top * (1.0 - ay) + bot * ay
 
 
@@ -104,24 +122,23 @@ def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, a
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _weight(px, py, pz, dx, dy, dz, cxs, cys, czs, incid, us, vs, conf, inv_sigma2, inv_feather):
+def _weight(px, py, pz, dx, dy, dz, cxs, cys, czs, us, vs, prior, inv_sigma2, inv_feather):
     # angle between the target ray d and the source ray (P - C) at the surface point P, through
     # angle^2 ~= 2 (1 - cos angle) (exact to 0.1 % below 10 degrees; monotonic everywhere)
     sx, sy, sz = px - cxs, py - cys, pz - czs
     ns2 = sx * sx + sy * sy + sz * sz
     cosang = (sx * dx + sy * dy + sz * dz) / math.sqrt(max(ns2, 1e-300))
     ang2 = 2.0 * (1.0 - cosang)
-    src_h, src_w = conf.shape
+    src_h, src_w = prior.shape
     border = min(min(us + 0.5, src_w - 0.5 - us), min(vs + 0.5, src_h - 0.5 - vs))
     feather = min(1.0, max(0.0, border * inv_feather))
-    # confidence of the source pixel: low on both sides of the source's own depth edges, where
-    # pixels mix foreground and background colour (nearest pixel)
-    c = conf[min(max(int(vs + 0.5), 0), src_h - 1), min(max(int(us + 0.5), 0), src_w - 1)]
-    return max(incid * incid * math.exp(-ang2 * inv_sigma2) * feather * c, _W_FLOOR)
+    # the source's own prior at the sample (bilinear): incidence^2 * edge confidence
+    c = _bilinear2(prior, us, vs)
+    return max(math.exp(-ang2 * inv_sigma2) * feather * c, _W_FLOOR)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def accumulate_spherical(src, conf, map_u, map_v, rng, incid, rows, cols, center, v0, v1, colmask, src_id, rel_tol,
+def accumulate_spherical(src, prior, map_u, map_v, rng, rows, cols, center, v0, v1, colmask, src_id, rel_tol,
                          cubic, inv_sigma2, inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
     """Add one source rendered into a spherical camera (rig-frame tables, see _ray_kernels);
     only rows v0..v1 and the columns set in colmask are read (the raster's region)."""
@@ -138,13 +155,13 @@ def accumulate_spherical(src, conf, map_u, map_v, rng, incid, rows, cols, center
             dx, dy, dz = clat * slon, -slat, clat * clon
             px, py, pz = sr * clon + z * dx, z * dy, -sr * slon + z * dz
             us, vs = map_u[v, u], map_v[v, u]
-            wgt = _weight(px, py, pz, dx, dy, dz, center[0], center[1], center[2], incid[v, u], us, vs, conf,
-                          inv_sigma2, inv_feather)
+            wgt = _weight(px, py, pz, dx, dy, dz, center[0], center[1], center[2], us, vs, prior, inv_sigma2,
+                          inv_feather)
             _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, acc_z, front, best_w, best_id)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def accumulate_pinhole(src, conf, map_u, map_v, depth, incid, kinv, center, src_id, rel_tol, cubic, inv_sigma2,
+def accumulate_pinhole(src, prior, map_u, map_v, depth, kinv, center, src_id, rel_tol, cubic, inv_sigma2,
                        inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
     """Add one source rendered into a pinhole target (planar depth z, target camera frame).
 
@@ -164,8 +181,8 @@ def accumulate_pinhole(src, conf, map_u, map_v, depth, incid, kinv, center, src_
             nrm = math.sqrt(rx * rx + ry * ry + rz * rz)
             px, py, pz = rx * z, ry * z, z
             us, vs = map_u[v, u], map_v[v, u]
-            wgt = _weight(px, py, pz, rx / nrm, ry / nrm, rz / nrm, center[0], center[1], center[2], incid[v, u],
-                          us, vs, conf, inv_sigma2, inv_feather)
+            wgt = _weight(px, py, pz, rx / nrm, ry / nrm, rz / nrm, center[0], center[1], center[2], us, vs, prior,
+                          inv_sigma2, inv_feather)
             _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, acc_z, front, best_w, best_id)
 
 

@@ -27,6 +27,7 @@ from numba import njit, prange
 
 __all__: list[str] = []
 
+_NARROW_MIN = 8  # bounds narrower than this many columns skip the per-row arc narrowing
 _PAD = 1.0  # pixels of slack around the sampled outline (the curve's sagitta between samples <= 3 px apart)
 
 
@@ -226,16 +227,15 @@ def region(bbox, width, height):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _arc(lx, ly, lz, slat, clat, lo, hi, mid):
+def _arc(rad, centre, ly, slat, clat, lo, hi, mid):
     """Narrow [lo, hi] (unwrapped longitudes, hi - lo < pi) to where ``l . d(lon) >= 0`` on a row
-    of latitude lat: ``l . d = R cos(lon - lon0) + C`` with ``(R sin lon0, R cos lon0) =
-    clat (lx, lz)``, ``C = -slat ly``. The failing set is the arc ``|lon - lon0 - pi| < pi - h``,
-    ``h = acos(-C / R)``; each of its copies (every 2 pi) that covers an end of [lo, hi] cuts it
-    there; a copy strictly inside would split it in two, and is left to the per-pixel test."""
-    a = clat * lx
-    b = clat * lz
+    of latitude lat: ``l . d = clat R cos(lon - lon0) + C`` with ``R = |(lx, lz)|``,
+    ``lon0 = atan2(lx, lz)`` (row-independent: ``clat > 0`` at every pixel centre), ``C = -slat ly``.
+    The failing set is the arc ``|lon - centre| < pi - h``, ``centre = lon0 + pi``,
+    ``h = acos(-C / (clat R))``; each of its copies (every 2 pi) that covers an end of [lo, hi] cuts
+    it there; a copy strictly inside would split it in two, and is left to the per-pixel test."""
+    r = clat * rad
     c = -slat * ly
-    r = math.hypot(a, b)
     if r < 1e-300:
         return (lo, hi) if c >= 0.0 else (1.0, -1.0)
     k = -c / r
@@ -244,7 +244,6 @@ def _arc(lx, ly, lz, slat, clat, lo, hi, mid):
     if k > 1.0:
         return 1.0, -1.0
     half = math.pi - math.acos(k)  # half-width of the failing arc
-    centre = math.atan2(a, b) + math.pi
     centre += 2.0 * math.pi * round((mid - centre) / (2.0 * math.pi))
     for shift in (-2.0 * math.pi, 0.0, 2.0 * math.pi):
         clo = centre + shift - half
@@ -261,14 +260,15 @@ def _arc(lx, ly, lz, slat, clat, lo, hi, mid):
 @njit(cache=True, error_model="numpy", inline="always")
 def _row_span(forms, slat, clat, ulo, uhi, width):
     """Columns [a, b] of a row whose rays start at the rig centre that can hit the quad: the
-    intersection of the six arcs of ``forms`` (6, 3) (4 rect sides, z_s > 0, n . d > 0), widened by
-    one pixel each way (the exact per-pixel test decides)."""
+    intersection of the six arcs of ``forms`` (6, 5) ``[lx, ly, lz, |(lx, lz)|, atan2(lx, lz) + pi]``
+    (4 rect sides, z_s > 0, n . d > 0), widened by one pixel each way (the exact per-pixel test
+    decides)."""
     scale = 2.0 * math.pi / width
     lo = ((ulo + 0.5) - 0.5 * width) * scale - scale
     hi = ((uhi + 0.5) - 0.5 * width) * scale + scale
     mid = 0.5 * (lo + hi)
     for i in range(6):
-        lo, hi = _arc(forms[i, 0], forms[i, 1], forms[i, 2], slat, clat, lo, hi, mid)
+        lo, hi = _arc(forms[i, 3], forms[i, 4], forms[i, 1], slat, clat, lo, hi, mid)
         if lo > hi:
             return 1, 0
     a = int(math.floor((lo / (2.0 * math.pi) + 0.5) * width - 0.5)) - 1
@@ -291,12 +291,11 @@ def _clamp(us, vs, cl, ct, cr, cb, su0, sv0, su1, sv1):
 
 
 def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band_start, band_quads, band_order,
-                 far_coord, v0, v1, colmask, rng, map_u, map_v, coverage, incid):
+                 far_coord, v0, v1, colmask, rng, map_u, map_v, coverage):
     """Z-buffered ray casting of quads into a spherical camera, one band of rows per task.
 
     rng (H, W) float32 receives the range along each pixel's unit ray from its own origin (NaN
-    uncovered); map_u/map_v the source pixel coordinates (far_coord uncovered); coverage bool;
-    incid the cosine between the source ray and the quad's plane normal (for blending weights).
+    uncovered); map_u/map_v the source pixel coordinates (far_coord uncovered); coverage bool.
     clamp (Q, 4) uint8 [left, top, right, bottom]: clamp the sample position to the rect's outer
     pixel centres on that side (as the pinhole rasterizer).
     """
@@ -309,7 +308,7 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
         r0 = band * rows_per_band
         r1 = min(height, r0 + rows_per_band)
         m = np.empty((3, 3))
-        forms = np.empty((6, 3))
+        forms = np.empty((6, 5))
         for v in range(max(r0, v0), min(r1, v1 + 1)):
             for u in range(width):
                 if colmask[u]:
@@ -317,7 +316,6 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
         for k in range(band_start[band], band_start[band + 1]):
             q = band_quads[k]
             nx, ny, nz, off = plane_rig[q, 0], plane_rig[q, 1], plane_rig[q, 2], plane_rig[q, 3]
-            inv_nn = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)  # |n| = |n_cam| (rotation)
             eu0, ev0 = rects[q, 0] - 0.5, rects[q, 1] - 0.5
             eu1, ev1 = rects[q, 2] - 0.5, rects[q, 3] - 0.5
             su0, sv0 = float(rects[q, 0]), float(rects[q, 1])
@@ -339,11 +337,15 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
                     forms[3, j] = -(fy * m[1, j] + (cy - ev1) * m[2, j])
                     forms[4, j] = m[2, j]
                     forms[5, j] = plane_rig[q, j]
+                for i in range(6):
+                    forms[i, 3] = math.hypot(forms[i, 0], forms[i, 2])
+                    forms[i, 4] = math.atan2(forms[i, 0], forms[i, 2]) + math.pi
             for v in range(max(bbox[q, 1], r0), min(bbox[q, 3] + 1, r1)):
                 slat, clat, sr = rows[v, 0], rows[v, 1], rows[v, 2]
                 a, b = ulo, uhi
                 if narrow and sr == 0.0:
-                    a, b = _row_span(forms, slat, clat, ulo, uhi, width)
+                    if uhi - ulo > _NARROW_MIN:  # narrow long rows analytically; short ones test every pixel
+                        a, b = _row_span(forms, slat, clat, ulo, uhi, width)
                     # rays from the rig centre: X_s = (off / n.d) M d, so the source pixel is the
                     # projection of M d (a homography of the direction), t = off / n.d
                     k0x, k0y, k0z = -slat * m[0, 1], -slat * m[1, 1], -slat * m[2, 1]
@@ -354,24 +356,23 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
                             u += width
                         sx, sz = clat * cols[u, 0], clat * cols[u, 1]
                         nd = nx * sx + nz * sz + kn
-                        if not (nd > 0.0):
+                        if not (nd > 0.0 and off < rng[v, u] * nd):  # t = off / nd beats the z-buffer
                             continue
-                        t = off / nd
-                        if not (t < rng[v, u]):
-                            continue
-                        xs = m[0, 0] * sx + m[0, 2] * sz + k0x
-                        ys = m[1, 0] * sx + m[1, 2] * sz + k0y
                         zs = m[2, 0] * sx + m[2, 2] * sz + k0z
                         if not (zs > 0.0):
                             continue
+                        xs = m[0, 0] * sx + m[0, 2] * sz + k0x
+                        ys = m[1, 0] * sx + m[1, 2] * sz + k0y
                         iz = 1.0 / zs
                         us = fx * xs * iz + cx
                         vs = fy * ys * iz + cy
                         if not (us >= eu0 and us < eu1 and vs >= ev0 and vs < ev1):
                             continue
+                        t = off / nd
+                        if not (t < rng[v, u]):  # the exact test (the product above may round)
+                            continue
                         us, vs = _clamp(us, vs, cl, ct, cr, cb, su0, sv0, su1, sv1)
                         rng[v, u] = t
-                        incid[v, u] = inv_nn * nd / (off * math.sqrt(xs * xs + ys * ys + zs * zs))
                         map_u[v, u] = us
                         map_v[v, u] = vs
                     continue
@@ -403,7 +404,6 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
                         continue
                     us, vs = _clamp(us, vs, cl, ct, cr, cb, su0, sv0, su1, sv1)
                     rng[v, u] = t
-                    incid[v, u] = inv_nn / math.sqrt(xs * xs + ys * ys + zs * zs)  # n_cam . X_s = 1
                     map_u[v, u] = us
                     map_v[v, u] = vs
         for v in range(max(r0, v0), min(r1, v1 + 1)):

@@ -6,7 +6,7 @@ or :class:`~ibr.base.ray_camera.SphericalCamera`), then added to running accumul
 per-pixel z-test of relative tolerance ``rel_tol`` (the nearest surface wins; samples of the same
 surface within the tolerance are blended). Weights (see :mod:`ibr.render._blend_kernels`) prefer
 the source that sees the surface from nearest the target ray (small angle at the surface point),
-most frontally (incidence; spherical targets), away from its own depth edges (mixed pixels), and
+most frontally (incidence), away from its own depth edges (mixed pixels), and
 fade toward each source's image border so the change of winning source leaves no seam.
 
 Conventions: colour float32 in the sources' value scale; depth is the range along each ray for
@@ -31,7 +31,7 @@ from .rasterize import _mesh_inv_depth, as_float_color, rasterize_mesh, scratch
 from .ray_raster import rasterize_mesh_rays
 from .rasterize import SourceMaps
 
-__all__ = ["Blended", "blend_sources", "edge_confidence"]
+__all__ = ["Blended", "blend_sources", "edge_confidence", "prefilter_sigma", "source_prior"]
 
 #: Relative inverse-depth jump between neighbouring source pixels that counts as a depth edge.
 EDGE_JUMP = 0.05
@@ -39,6 +39,7 @@ EDGE_JUMP = 0.05
 EDGE_RAMP_PX = 2.0
 
 _conf_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_prior_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 def edge_confidence(mesh) -> np.ndarray:
@@ -75,6 +76,73 @@ def edge_confidence(mesh) -> np.ndarray:
     return conf
 
 
+#: Prefilter strength: Gaussian sigma = PREFILTER_K * sqrt(s^2 - 1) source pixels for a source
+#: s times finer than the target (measured on the ``capture`` scene: best PSNR at 0.35-0.45 for
+#: s = 1.1-1.6; benchmarks/bench_stitch.py).
+PREFILTER_K = 0.4
+
+
+def _pixels_per_radian(camera) -> float:
+    """Sampling density at the image centre (pinhole) or along the equator (spherical)."""
+    if isinstance(camera, SphericalCamera):
+        return camera.width / (2.0 * np.pi)
+    return float(np.sqrt(camera.fx * camera.fy))
+
+
+def prefilter_sigma(source_camera, target_camera) -> float:
+    """Gaussian sigma (source pixels) that band-limits a source to the target's sampling rate.
+
+    A target pixel averages the scene over its own footprint; sampling a finer source at one
+    point per target pixel would alias its fine texture. With ``s`` the ratio of source to target
+    pixels per radian (source centre vs target centre/equator), the missing blur is about that of
+    a box of ``s`` source pixels less the source's own pixel, variance ``(s^2 - 1) / 12``; the
+    constant ``PREFILTER_K`` was fitted on the synthetic capture scene. 0 when ``s <= 1``.
+    """
+    s = _pixels_per_radian(source_camera) / _pixels_per_radian(target_camera)
+    return float(PREFILTER_K * np.sqrt(max(s * s - 1.0, 0.0)))
+
+
+def _prefilter(color: np.ndarray, sigma: float) -> np.ndarray:
+    if sigma < 0.05:
+        return color
+    k = 2 * int(np.ceil(3.0 * sigma)) + 1
+    return cv2.GaussianBlur(color, (k, k), sigma, borderType=cv2.BORDER_REPLICATE).reshape(color.shape)
+
+
+def incidence(mesh) -> np.ndarray:
+    """(H, W) float32 cosine between each source pixel's ray and its quad's plane normal (1 = seen
+    head-on, 0 = grazing or no quad).
+
+    The quad's plane in the source camera frame is ``n . X = 1`` with ``n = (a fx, b fy,
+    a cx + b cy + c)`` (inverse depth ``1/z = a u + b v + c``); the pixel's point is
+    ``X = z (x', y', 1)``, ``x' = (u - cx) / fx``, so ``cos = (n . X) / (|n| |X|) =
+    (1/z) / (|n| sqrt(x'^2 + y'^2 + 1))``.
+    """
+    cam = mesh.camera
+    q = mesh.quad_of_pixel
+    h, w = q.shape
+    v, u = np.mgrid[0:h, 0:w]
+    p = mesh.inv_depth_planes[np.where(q >= 0, q, 0)]
+    a, b, c = p[..., 0], p[..., 1], p[..., 2]
+    n_norm = np.sqrt((a * cam.fx) ** 2 + (b * cam.fy) ** 2 + (a * cam.cx + b * cam.cy + c) ** 2)
+    inv = a * u + b * v + c
+    ray = np.sqrt(((u - cam.cx) / cam.fx) ** 2 + ((v - cam.cy) / cam.fy) ** 2 + 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos = np.where((q >= 0) & (inv > 0), inv / (n_norm * ray), 0.0)
+    return np.clip(cos, 0.0, 1.0).astype(np.float32)
+
+
+def source_prior(mesh) -> np.ndarray:
+    """(H, W) float32 weight of each source pixel before the target is known:
+    ``incidence(mesh)**2 * edge_confidence(mesh)`` (frontal, clean pixels win). Cached per mesh."""
+    prior = _prior_cache.get(mesh)
+    if prior is None:
+        prior = (incidence(mesh) ** 2 * edge_confidence(mesh)).astype(np.float32)
+        prior.setflags(write=False)
+        _prior_cache[mesh] = prior
+    return prior
+
+
 @dataclass(frozen=True, eq=False)
 class Blended:
     """Result of :func:`blend_sources`.
@@ -105,7 +173,7 @@ def _target_shape(camera) -> tuple[int, int]:
 
 def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg: float = 10.0,
                   feather_px: float = 16.0, footprint: str = "free", interpolation: str = "linear",
-                  progress=None) -> Blended:
+                  antialias: bool = True, progress=None) -> Blended:
     """Render and blend N sources into one target camera.
 
     Parameters
@@ -126,6 +194,9 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
         Clamping of sample positions at quad sides (:func:`ibr.render.rasterize_mesh`).
     interpolation : {"linear", "cubic"}
         Colour reconstruction: bilinear, or bicubic (Keys, a = -0.75, as OpenCV's INTER_CUBIC).
+    antialias : bool
+        Prefilter each source finer than the target (see :func:`prefilter_sigma`) so that fine
+        texture does not alias when a rig of sharp cameras makes a smaller panorama.
     progress : callable, optional
         Called as ``progress(i)`` after source i has been added.
 
@@ -141,6 +212,8 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
     if len(sources) == 0:
         raise ValueError("sources: expected at least one (mesh, color) source, got none")
     colors = [as_float_color(c) for _, c in sources]
+    if antialias:
+        colors = [_prefilter(col, prefilter_sigma(mesh.camera, camera)) for (mesh, _), col in zip(sources, colors)]
     nch = {c.shape[2] for c in colors}
     if len(nch) != 1:
         raise ValueError(f"sources: every colour must have the same number of channels, got {sorted(nch)}")
@@ -158,7 +231,6 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
     best_id = np.full((h, w), -1, np.int16)
     maps = SourceMaps(scratch(("blend", "u"), shape, np.float32), scratch(("blend", "v"), shape, np.float32),
                       scratch(("blend", "z"), shape, np.float32), scratch(("blend", "c"), shape, np.bool_))
-    incid = scratch(("blend", "i"), shape, np.float32)
     args = (rel_tol, interpolation == "cubic", 1.0 / (sigma * sigma), 1.0 / feather, acc, acc_w, acc_z, front,
             best_w, best_id)
     for i, ((mesh, _), col) in enumerate(zip(sources, colors)):
@@ -166,15 +238,15 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
             from .ray_raster import _tables
 
             region = [0, -1, None]
-            rasterize_mesh_rays(mesh, camera, footprint=footprint, out=maps, incidence=incid, _region=region)
+            rasterize_mesh_rays(mesh, camera, footprint=footprint, out=maps, _region=region)
             center = (camera.world_from_rig[:3, :3].T @ (mesh.camera.position - camera.world_from_rig[:3, 3]))
-            _k.accumulate_spherical(col, edge_confidence(mesh), maps.map_u, maps.map_v, maps.depth, incid, _tables(camera, "rows"),
-                                    _tables(camera, "cols"), np.ascontiguousarray(center), *region, i, *args)
+            _k.accumulate_spherical(col, source_prior(mesh), maps.map_u, maps.map_v, maps.depth,
+                                    _tables(camera, "rows"), _tables(camera, "cols"), np.ascontiguousarray(center),
+                                    *region, i, *args)
         else:
             m = rasterize_mesh(mesh, camera, footprint=footprint)
-            incid.fill(1.0)  # no per-pixel plane normal on the pinhole path
             center = (camera.cam_from_world @ np.append(mesh.camera.position, 1.0))[:3]
-            _k.accumulate_pinhole(col, edge_confidence(mesh), m.map_u, m.map_v, m.depth, incid, np.linalg.inv(camera.K),
+            _k.accumulate_pinhole(col, source_prior(mesh), m.map_u, m.map_v, m.depth, np.linalg.inv(camera.K),
                                   np.ascontiguousarray(center), i, *args)
         if progress is not None:
             progress(i)

@@ -41,8 +41,7 @@ def src_from_rig(source, camera: SphericalCamera) -> tuple[np.ndarray, np.ndarra
 
 
 def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free", depth_tol: float = 0.01,
-                        out: SourceMaps | None = None, incidence: np.ndarray | None = None,
-                        _region: list | None = None) -> SourceMaps:
+                        out: SourceMaps | None = None, _region: list | None = None) -> SourceMaps:
     """Z-buffered ray casting of ``mesh`` into a spherical camera: source coordinates and range.
 
     Parameters
@@ -55,9 +54,6 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
         Clamping of sample positions at quad sides, as :func:`ibr.render.rasterize_mesh`.
     out : SourceMaps, optional
         Preallocated (H, W) arrays to overwrite (``depth`` receives the range).
-    incidence : (H, W) float32 array, optional
-        Receives, at covered pixels, the cosine between the source camera's ray and the quad's
-        plane normal (1 = seen head-on); untouched elsewhere.
     _region : list, optional
         Internal (blending): when given, only the region the quads can reach is written and
         ``_region`` receives ``[v0, v1, column_mask]``; the rest of ``out`` is stale.
@@ -83,8 +79,6 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
     setup(mesh.rects, mesh.inv_depth_planes, src_k, rot, tr, camera.sign, 0.5 * camera.ipd,
           np.radians(camera.fade_start_deg), np.radians(camera.fade_end_deg), w, h, plane_rig, bbox)
     flags = _clamp_flags(mesh, footprint, depth_tol)
-    if incidence is None:
-        incidence = np.empty((h, w), np.float32)
     start, order = bucket_bands(bbox, h, _bands(h))
     if _region is None:
         v0, v1, colmask = 0, h - 1, np.ones(w, np.uint8)
@@ -93,7 +87,7 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
         _region[:] = [v0, v1, colmask]
     _k.raster_rays(mesh.rects, plane_rig, bbox, flags, src_k, rot, tr, _tables(camera, "rows"),
                    _tables(camera, "cols"), start, order, _band_order(len(start) - 1), _FAR, v0, v1, colmask, out.depth, out.map_u, out.map_v,
-                   out.coverage, incidence)
+                   out.coverage)
     return out
 
 
