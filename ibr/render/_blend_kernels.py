@@ -32,22 +32,6 @@ _W_FLOOR = 1e-6
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _bilinear(src, x, y, ch):
-    h, w = src.shape[0], src.shape[1]
-    fx0 = math.floor(x)
-    fy0 = math.floor(y)
-    ax = x - fx0
-    ay = y - fy0
-    x0 = min(max(int(fx0), 0), w - 1)
-    x1 = min(max(int(fx0) + 1, 0), w - 1)
-    y0 = min(max(int(fy0), 0), h - 1)
-    y1 = min(max(int(fy0) + 1, 0), h - 1)
-    top = src[y0, x0, ch] * (1.0 - ax) + src[y0, x1, ch] * ax
-    bot = src[y1, x0, ch] * (1.0 - ax) + src[y1, x1, ch] * ax
-    return top * (1.0 - ay) + bot * ay
-
-
-@njit(cache=True, error_model="numpy", inline="always")
 def _bilinear2(src, x, y):
     """Bilinear sample of a 2-D array (pixel centres at integers; taps clamped to the image)."""
     h, w = src.shape
@@ -112,8 +96,25 @@ def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, a
         return  # hidden behind the front surface
     elif z < f:
         front[v, u] = z
-    for ch in range(acc.shape[2]):
-        acc[v, u, ch] += wgt * (_bicubic(src, us, vs, ch) if cubic else _bilinear(src, us, vs, ch))
+    if cubic:
+        for ch in range(acc.shape[2]):
+            acc[v, u, ch] += wgt * _bicubic(src, us, vs, ch)
+    else:  # bilinear: the four taps and their weights once for every channel
+        h, w = src.shape[0], src.shape[1]
+        fx0 = math.floor(us)
+        fy0 = math.floor(vs)
+        ax = us - fx0
+        ay = vs - fy0
+        x0 = min(max(int(fx0), 0), w - 1)
+        x1 = min(max(int(fx0) + 1, 0), w - 1)
+        y0 = min(max(int(fy0), 0), h - 1)
+        y1 = min(max(int(fy0) + 1, 0), h - 1)
+        w00 = wgt * (1.0 - ax) * (1.0 - ay)
+        w01 = wgt * ax * (1.0 - ay)
+        w10 = wgt * (1.0 - ax) * ay
+        w11 = wgt * ax * ay
+        for ch in range(acc.shape[2]):
+            acc[v, u, ch] += (w00 * src[y0, x0, ch] + w01 * src[y0, x1, ch]) + (w10 * src[y1, x0, ch] + w11 * src[y1, x1, ch])
     acc_w[v, u] += wgt
     acc_z[v, u] += wgt * z
     if wgt > best_w[v, u]:
