@@ -29,9 +29,13 @@ from numba import njit, prange
 __all__: list[str] = []
 
 _W_FLOOR = 1e-6
+#: LLVM fast-math flags that keep IEEE NaN/inf semantics (the z-tests rely on NaN comparing false
+#: and on an infinite "front"): reassociation, reciprocals, contraction to FMA and approximate
+#: library functions. About 6 % faster accumulation (paired, one thread); results change in the last bits only.
+_FAST = {"reassoc", "nsz", "arcp", "contract", "afn"}
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", fastmath=_FAST)
 def _bilinear2(src, x, y):
     """Bilinear sample of a 2-D array (pixel centres at integers; taps clamped to the image)."""
     h, w = src.shape
@@ -48,7 +52,7 @@ def _bilinear2(src, x, y):
     return top * (1.0 - ay) + bot * ay
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", fastmath=_FAST)
 def _cubic_weights(t):
     """Keys cubic convolution weights (a = -0.75, OpenCV's INTER_CUBIC) of the taps -1, 0, 1, 2."""
     a = -0.75
@@ -62,7 +66,7 @@ def _cubic_weights(t):
     return w0, w1, w2, w3
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", fastmath=_FAST)
 def _bicubic(src, x, y, ch):
     """Bicubic sample (pixel centres at integers; taps clamped to the image)."""
     h, w = src.shape[0], src.shape[1]
@@ -82,7 +86,7 @@ def _bicubic(src, x, y, ch):
     return total
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", fastmath=_FAST)
 def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, acc_z, front, best_w, best_id):
     f = front[v, u]
     if z < f * (1.0 - rel_tol):  # nearer surface: occludes what was accumulated
@@ -122,7 +126,7 @@ def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, a
         best_id[v, u] = src_id
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy", inline="always", fastmath=_FAST)
 def _weight(px, py, pz, dx, dy, dz, cxs, cys, czs, us, vs, prior, inv_sigma2, inv_feather):
     # angle between the target ray d and the source ray (P - C) at the surface point P, through
     # angle^2 ~= 2 (1 - cos angle) (exact to 0.1 % below 10 degrees; monotonic everywhere)
@@ -138,7 +142,7 @@ def _weight(px, py, pz, dx, dy, dz, cxs, cys, czs, us, vs, prior, inv_sigma2, in
     return max(math.exp(-ang2 * inv_sigma2) * feather * c, _W_FLOOR)
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True, fastmath=_FAST)
 def accumulate_spherical(src, prior, map_u, map_v, rng, rows, cols, center, v0, v1, colmask, src_id, rel_tol,
                          cubic, inv_sigma2, inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
     """Add one source rendered into a spherical camera (rig-frame tables, see _ray_kernels);
@@ -161,7 +165,7 @@ def accumulate_spherical(src, prior, map_u, map_v, rng, rows, cols, center, v0, 
             _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, acc_z, front, best_w, best_id)
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True, fastmath=_FAST)
 def accumulate_pinhole(src, prior, map_u, map_v, depth, kinv, center, src_id, rel_tol, cubic, inv_sigma2,
                        inv_feather, acc, acc_w, acc_z, front, best_w, best_id):
     """Add one source rendered into a pinhole target (planar depth z, target camera frame).
@@ -187,7 +191,7 @@ def accumulate_pinhole(src, prior, map_u, map_v, depth, kinv, center, src_id, re
             _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, acc_z, front, best_w, best_id)
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
+@njit(cache=True, error_model="numpy", parallel=True, fastmath=_FAST)
 def resolve(acc, acc_w, acc_z, out, depth, coverage):
     """Normalize the accumulators: colour and depth as weighted means; coverage where w > 0."""
     h, w = acc_w.shape
