@@ -44,9 +44,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--face-size", type=image_side, default=None, help="face size for --serve")
     parser.add_argument("--stereo", choices=("none", "top-bottom", "sbs"), default="none",
                         help="PANO is an ODS pair (ibr stitch --stereo ods): left eye on top (top-bottom) or "
-                        "left | right (sbs); stills and tours show both eyes as --stereo-out")
+                        "left | right (sbs); stills and tours show both eyes as --stereo-out; --serve/--site "
+                        "writes both eyes and the page offers mono / anaglyph / side by side")
     parser.add_argument("--stereo-out", choices=("anaglyph", "sbs"), default="anaglyph",
-                        help="how a stereo still/tour shows the eyes: red-cyan anaglyph (default) or side by side")
+                        help="how a stereo still/tour shows the eyes (and the web page's first mode): red-cyan "
+                        "anaglyph (default) or side by side")
 
 
 def _write_animation(path: Path, frames, fps: float) -> None:
@@ -74,20 +76,13 @@ def _write_animation(path: Path, frames, fps: float) -> None:
 
 
 def split_stereo(pano, mode: str):
-    """(left, right) equirect eyes of an ODS pair packed ``top-bottom`` (left on top) or ``sbs``."""
-    import numpy as np
+    """(left, right) equirect eyes of an ODS pair packed ``top-bottom`` or ``sbs`` (PANO's message)."""
+    from panorama.viewer import split_stereo as split
 
-    a = np.asarray(pano)
-    if not isinstance(a, np.ndarray) or a.ndim not in (2, 3):
-        raise ValueError("PANO: --stereo needs one packed equirect image (not cube faces)")
-    h, w = a.shape[:2]
-    if mode == "top-bottom":
-        if h % 2 or w != h:
-            raise ValueError(f"PANO: a top-bottom ODS pair of 2:1 eyes is square (W = H, H even), got {w}x{h}")
-        return a[: h // 2], a[h // 2:]
-    if w % 2 or w != 4 * h:
-        raise ValueError(f"PANO: a side-by-side ODS pair of 2:1 eyes is 4:1 (W = 4 H), got {w}x{h}")
-    return a[:, : w // 2], a[:, w // 2:]
+    try:
+        return split(pano, mode)
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("pano:", "PANO:", 1).replace("stereo panorama", "--stereo panorama")) from None
 
 
 def _show_pair(left, right, how: str):
@@ -108,22 +103,24 @@ def _serve(args, pano, layout) -> int:
             folder = Path(args.site)
         server = None
         try:
+            stereo = None if args.stereo == "none" else args.stereo
             if temporary:
-                write_site(folder, pano, layout=layout, face_size=args.face_size)
+                write_site(folder, pano, layout=layout, face_size=args.face_size, stereo=stereo)
             else:
                 with OutputPlan("ibr view", log=info) as plan:
                     plan.add_input("PANO", args.pano)
                     site = plan.add_folder("--site", folder, SITE_FILES)
                     plan.check()
-                    write_site(plan.stage(site), pano, layout=layout, face_size=args.face_size)
+                    write_site(plan.stage(site), pano, layout=layout, face_size=args.face_size, stereo=stereo)
                     plan.commit()
             from panorama.canvas import serve_canvas_site, store_path, write_canvas_site  # canvases (#14)
 
             write_canvas_site(folder)
             server = serve_canvas_site(folder, store_path(args.pano), port=args.port)
             info(f"view: click-to-place canvases are stored in {store_path(args.pano)}")
+            mode = None if stereo is None else ("sbs" if args.stereo_out == "sbs" else "anaglyph")
             info(f"view: serving {folder} at "
-                 f"{site_url(server, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov)}"
+                 f"{site_url(server, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov, mode=mode)}"
                  " (127.0.0.1 only; Ctrl-C stops)")
             while True:
                 time.sleep(3600)
@@ -146,14 +143,18 @@ def run(args) -> int:
     from panorama.files import read_panorama
     from panorama.viewer import check_site_folder, to_uint8, tour_views  # noqa: F401
 
-    if args.serve and args.stereo != "none":
-        raise ValueError("--stereo: the web viewer shows mono panoramas; use a still or --tour (issue #18)")
     if args.serve:
         if args.site is not None:
             check_site_folder(args.site, force=args.force)  # before reading anything (#12)
         elif args.force:
             raise ValueError("--force: only with --site")
-        pano, layout = read_panorama(args.pano, layout=args.layout)
+        if args.stereo != "none":
+            from ibr.io import read_image
+
+            pano, layout = read_image(args.pano, what="PANO"), "equirect"
+            split_stereo(pano, args.stereo)  # the packing is checked before the site is written
+        else:
+            pano, layout = read_panorama(args.pano, layout=args.layout)
         return _serve(args, pano, layout)
     if args.site is not None or args.force:
         raise ValueError("--site/--force: only with --serve")

@@ -2,7 +2,10 @@
 
 * :func:`tour_views` renders N perspective views turning once around the vertical axis.
 * :func:`write_site` writes the static page (``panorama/web/index.html``) next to six 8-bit face
-  files ``px.png .. nz.png`` (canonical orientation, :mod:`panorama.directions`).
+  files ``px.png .. nz.png`` (canonical orientation, :mod:`panorama.directions`) and
+  ``viewer.json``; for a stereo (ODS) panorama also the right eye's ``px_r.png .. nz_r.png``, and
+  the page offers mono / red-cyan anaglyph / side-by-side (phone headsets) with a button, the
+  ``m`` key or ``?mode=``.
 * :func:`serve` serves such a folder on 127.0.0.1 only (``http.server``) from a background
   thread; the caller stops it with ``server.shutdown()``. Only the page and the six faces are
   served, never other files that happen to be in the folder.
@@ -18,6 +21,7 @@ from __future__ import annotations
 
 import functools
 import http.server
+import json
 import shutil
 import threading
 from pathlib import Path
@@ -25,15 +29,40 @@ from pathlib import Path
 import numpy as np
 
 from .convert import equirect_to_cubemap, perspective
-from .files import write_cubemap
+from .directions import FACE_FILE_NAMES
+from ibr.io import write_image
 from .layouts import unpack_faces
 
-__all__ = ["SITE_FILES", "WEB_DIR", "check_site_folder", "serve", "site_url", "to_uint8", "tour_views",
-           "write_site"]
+__all__ = ["SITE_FILES", "STEREO_LAYOUTS", "VIEW_MODES", "WEB_DIR", "check_site_folder", "serve", "site_url",
+           "split_stereo", "to_uint8", "tour_views", "write_site"]
 
 WEB_DIR = Path(__file__).with_name("web")
 #: The files of a viewer site: what write_site writes and the only files serve() serves.
-SITE_FILES = ("index.html",) + tuple(f"{n}.png" for n in ("px", "nx", "py", "ny", "pz", "nz"))
+_FACES = FACE_FILE_NAMES  # px, nx, py, ny, pz, nz
+SITE_FILES = (("index.html", "viewer.json") + tuple(f"{n}.png" for n in _FACES)
+              + tuple(f"{n}_r.png" for n in _FACES))
+#: How a stereo panorama packs its eyes (what ``ibr stitch --stereo ods --layout`` writes).
+STEREO_LAYOUTS = ("top-bottom", "sbs")
+#: What the page shows of a stereo panorama (``?mode=``); mono panoramas show "mono" only.
+VIEW_MODES = ("mono", "anaglyph", "sbs")
+
+
+def split_stereo(pano, layout: str):
+    """(left, right) equirect eyes of an ODS pair packed ``"top-bottom"`` (left eye on top: each
+    eye W x W/2, so the image is square) or ``"sbs"`` (left | right: 4:1)."""
+    if layout not in STEREO_LAYOUTS:
+        raise ValueError(f"stereo: expected one of {', '.join(STEREO_LAYOUTS)}, got {layout!r}")
+    a = np.asarray(pano) if isinstance(pano, np.ndarray) else None
+    if a is None or a.ndim not in (2, 3):
+        raise ValueError("pano: a stereo panorama must be one packed equirect image (not cube faces)")
+    h, w = a.shape[:2]
+    if layout == "top-bottom":
+        if h % 2 or w != h:
+            raise ValueError(f"pano: a top-bottom ODS pair of 2:1 eyes is square (W = H, H even), got {w}x{h}")
+        return a[: h // 2], a[h // 2:]
+    if w % 2 or w != 4 * h:
+        raise ValueError(f"pano: a side-by-side ODS pair of 2:1 eyes is 4:1 (W = 4 H), got {w}x{h}")
+    return a[:, : w // 2], a[:, w // 2:]
 
 
 def check_site_folder(folder, *, force: bool = False) -> Path:
@@ -76,15 +105,30 @@ def tour_views(pano, n: int, *, pitch_deg: float = 0.0, fov_deg: float = 90.0, w
 
 
 def write_site(folder, pano, *, layout: str | None = None, face_size: int | None = None,
-               force: bool = False) -> Path:
-    """Write ``index.html`` and ``px.png .. nz.png`` into ``folder``; return the page's path.
+               force: bool = False, stereo: str | None = None) -> Path:
+    """Write ``index.html``, ``viewer.json`` and the faces into ``folder``; return the page's path.
 
     ``pano`` is an equirect image (converted to faces of ``face_size``, default width / pi rounded
-    up to a multiple of 8, capped at 2048) or a cubemap in ``layout``. ``folder`` must be new or
-    empty unless ``force`` (:func:`check_site_folder`).
+    up to a multiple of 8, capped at 2048) or a cubemap in ``layout``. With ``stereo``
+    (``"top-bottom"`` or ``"sbs"``, :data:`STEREO_LAYOUTS`) ``pano`` is a packed ODS pair: the left
+    eye goes to ``px.png .. nz.png``, the right eye to ``px_r.png .. nz_r.png``. ``folder`` must
+    be new or empty unless ``force`` (:func:`check_site_folder`).
     """
+    eyes = split_stereo(pano, stereo) if stereo is not None else (pano,)
     folder = check_site_folder(folder, force=force)
+    faces_per_eye = [_faces(eye, layout, face_size) for eye in eyes]  # all converted before writing
     folder.mkdir(parents=True, exist_ok=True)
+    for faces, suffix in zip(faces_per_eye, ("", "_r")):
+        for name, face in zip(_FACES, faces):
+            write_image(folder / f"{name}{suffix}.png", face)
+    (folder / "viewer.json").write_text(json.dumps({"stereo": stereo is not None}) + "\n")
+    page = folder / "index.html"
+    shutil.copyfile(WEB_DIR / "index.html", page)
+    return page
+
+
+def _faces(pano, layout, face_size):
+    """Six uint8 faces (px, nx, py, ny, pz, nz) of an equirect image or a cubemap."""
     if layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
                                 and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
         if face_size is None:
@@ -93,11 +137,7 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     else:
         from .convert import detect_layout
         faces = unpack_faces(pano, layout or detect_layout(pano))
-    faces = [to_uint8(np.ascontiguousarray(f)) for f in faces]
-    write_cubemap(folder, faces, layout="files", ext=".png")
-    page = folder / "index.html"
-    shutil.copyfile(WEB_DIR / "index.html", page)
-    return page
+    return [to_uint8(np.ascontiguousarray(f)) for f in faces]
 
 
 class _SiteHandler(http.server.SimpleHTTPRequestHandler):
@@ -138,8 +178,12 @@ def serve(folder, *, port: int = 0, quiet: bool = True) -> http.server.Threading
     return server
 
 
-def site_url(server, *, yaw_deg=0.0, pitch_deg=0.0, roll_deg=0.0, fov_deg=90.0, hud=True) -> str:
-    """URL of the page served by ``server`` at a given view."""
+def site_url(server, *, yaw_deg=0.0, pitch_deg=0.0, roll_deg=0.0, fov_deg=90.0, hud=True,
+             mode: str | None = None) -> str:
+    """URL of the page served by ``server`` at a given view (``mode``: one of :data:`VIEW_MODES`;
+    ``fov_deg`` is across each eye's image, i.e. across half the page in ``"sbs"``)."""
+    if mode is not None and mode not in VIEW_MODES:
+        raise ValueError(f"mode: expected one of {', '.join(VIEW_MODES)}, got {mode!r}")
     port = server.server_address[1]
     return (f"http://127.0.0.1:{port}/index.html?yaw={yaw_deg:g}&pitch={pitch_deg:g}"
-            f"&roll={roll_deg:g}&fov={fov_deg:g}" + ("" if hud else "&hud=0"))
+            f"&roll={roll_deg:g}&fov={fov_deg:g}" + ("" if hud else "&hud=0") + (f"&mode={mode}" if mode else ""))
