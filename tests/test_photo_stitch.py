@@ -230,3 +230,14 @@ def test_cli_writes_outputs_and_nothing_on_failure(tmp_path, photos, capsys):
     assert main(["stitch-photos", *paths, "-o", paths[0]]) == 1
     assert "refusing to overwrite an input" in capsys.readouterr().err
     assert read_image(paths[0]).shape == (300, 400, 3)
+
+
+@pytest.mark.parametrize("detector", ["sift", "orb", "akaze"])
+def test_every_offered_detector_finds_features(photos, detector):
+    """Each --detector choice builds (OpenCV 5 keeps AKAZE in xfeatures2d) and finds keypoints on
+    a textured photo, but none on a flat one."""
+    from panorama.photo.features import detect
+
+    gray = cv2.cvtColor(np.ascontiguousarray(photos.images[0]), cv2.COLOR_RGB2GRAY)
+    feats = detect([gray, np.full_like(gray, 128)], detector)
+    assert len(feats[0].keypoints) >= 50 and len(feats[1].keypoints) == 0

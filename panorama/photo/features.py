@@ -77,7 +77,9 @@ def _finder(detector: str):
         return cv2.SIFT_create()
     if detector == "orb":
         return cv2.ORB_create(2000)
-    return cv2.AKAZE_create()
+    # OpenCV 5 moved AKAZE to the contrib module xfeatures2d (opencv-contrib-python-headless)
+    create = getattr(cv2, "AKAZE_create", None) or cv2.xfeatures2d.AKAZE_create
+    return create()
 
 
 def detect(gray_images, detector: str = "sift", masks=None) -> list:
