@@ -195,8 +195,9 @@ def test_depth_exr_exact_and_png_scaled(tmp_path):
         write_depth(tmp_path / "y.png", z, scale=1e-4)  # 60 m / 0.1 mm overflows
     with pytest.raises(ValueError, match=r"a 16-bit PNG holds 1\.\.65535"):
         write_depth(tmp_path / "y.png", np.full((2, 2), 0.001), scale=0.01)  # would read back as invalid
-    write_image(tmp_path / "rgb.exr", np.zeros((3, 3, 3), np.float32))
-    with pytest.raises(ValueError, match="expected a single-channel depth image"):
+    rgb = RNG.uniform(0.5, 2.0, (3, 3, 3)).astype(np.float32)  # a colour image, not a depth pass
+    write_image(tmp_path / "rgb.exr", rgb)
+    with pytest.raises(ValueError, match=r"whose values differ at \d+ pixel\(s\) \(R vs G\)"):
         read_depth(tmp_path / "rgb.exr")
     assert not (tmp_path / "y.png").exists()
 

@@ -33,10 +33,12 @@ from typing import Iterator
 import numpy as np
 
 from ..base import depth as _depth
-from ..base.validate import check_choice, check_image, check_image_size
+from ..base.validate import check_choice, check_image, check_image_size, nearest_name
 
 __all__ = [
+    "DEPTH_CHANNEL_NAMES",
     "atomic_path",
+    "depth_channel_names",
     "read_depth",
     "read_image",
     "read_pfm",
@@ -266,26 +268,106 @@ def write_image(path, array) -> None:
 
 
 # --------------------------------------------------------------------------- depth files
-def read_depth(path, *, scale: float | None = None, what: str = "depth") -> np.ndarray:
-    """Read a single-channel depth (or disparity, or any per-pixel scalar) file as float32.
+#: Channel names other tools give a depth pass, tried in this order when a file has several
+#: channels and none is named: Blender's multilayer EXR (``ViewLayer.Depth.Z``, ``Depth.Z``), a
+#: plain ``Z``/``depth`` channel, ``depth.V`` / ``distance.Y`` (Nuke-style layer.channel names).
+DEPTH_CHANNEL_NAMES = ("Depth.Z", "Z", "depth", "Depth", "depth.V", "depth.Y", "distance.Y", "Y", "V")
+
+
+def depth_channel_names(path, *, what: str = "depth") -> list[str]:
+    """Channel names of an image file (``R``, ``G``, ... for plain images)."""
+    path = Path(path)
+    _require_file(path, what)
+    if path.suffix.lower() == ".pfm":
+        return ["Y"] if read_pfm(path)[0].ndim == 2 else ["R", "G", "B"]
+    oiio = _oiio()
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise ValueError(f"{what}: cannot read {path}: {oiio.geterror() or 'unknown format'}")
+    try:
+        return list(inp.spec().channelnames)
+    finally:
+        inp.close()
+
+
+def _pick_depth_channel(names: list[str], channel: str | None, path: Path, what: str) -> int | None:
+    """Index of the depth channel among ``names``; None = decide from the pixels (R = G = B)."""
+    if channel is not None:
+        if channel in names:
+            return names.index(channel)
+        tails = [i for i, n in enumerate(names) if n.endswith("." + channel)]
+        if len(tails) == 1:
+            return tails[0]
+        tails = {n.split(".", 1)[1]: n for n in names if "." in n}  # "Depth.Z" of "ViewLayer.Depth.Z"
+        near = nearest_name(channel, names) or tails.get(nearest_name(channel, tails) or "")
+        raise ValueError(f"{what}: {path} has no channel {channel!r}"
+                         f"{f' (did you mean {near!r}?)' if near else ''}; it has {', '.join(names)}")
+    if len(names) == 1:
+        return 0
+    for want in DEPTH_CHANNEL_NAMES:  # Blender: "ViewLayer.Depth.Z" ends with ".Depth.Z"
+        hits = [i for i, n in enumerate(names) if n == want or n.endswith("." + want)]
+        if len(hits) == 1:
+            return hits[0]
+    return None
+
+
+def _depth_array(path: Path, channel: str | None, what: str) -> np.ndarray:
+    """(H, W) stored depth values: the named channel, the one depth-named channel, or the one
+    value of an RGB(A) file whose colour channels agree (Blender's File Output node writes
+    R = G = B = Z)."""
+    names = depth_channel_names(path, what=what)
+    a = read_image(path, what=what)
+    if a.ndim == 2:
+        if channel is not None:
+            _pick_depth_channel(names[:1], channel, path, what)  # a wrong name is still an error
+        return a
+    k = _pick_depth_channel(names, channel, path, what)
+    if k is not None:
+        return np.ascontiguousarray(a[..., k])
+    colour = [i for i, n in enumerate(names) if n.split(".")[-1] in ("R", "G", "B")]
+    if len(colour) < 2:
+        raise ValueError(f"{what}: {path} has {len(names)} channels ({', '.join(names)}) and none is a depth "
+                         f"channel; name it with the view file's \"channel\" key")
+    first = a[..., colour[0]]
+    for i in colour[1:]:
+        same = (a[..., i] == first) | (np.isnan(a[..., i]) & np.isnan(first)) if a.dtype.kind == "f" \
+            else a[..., i] == first
+        if not np.all(same):
+            bad = int((~same).sum())
+            raise ValueError(f"{what}: {path} has {len(names)} channels ({', '.join(names)}) whose values "
+                             f"differ at {bad} pixel(s) ({names[colour[0]]} vs {names[i]}): a colour image, not a "
+                             f"depth pass? Name the depth channel with the view file's \"channel\" key")
+    return np.ascontiguousarray(first)
+
+
+def read_depth(path, *, scale: float | None = None, channel: str | None = None,
+               what: str = "depth") -> np.ndarray:
+    """Read a depth (or disparity, or any per-pixel scalar) file as float32, as tools write them.
 
     Parameters
     ----------
     path : str or Path
         Float ``.exr``/``.tif``/``.pfm`` (values as stored; NaN and +-inf become NaN) or integer
-        ``.png``/``.tif`` (``value = code * scale``, code 0 becomes NaN).
+        ``.png``/``.tif`` (``value = code * scale``, code 0 becomes NaN). Single channel; or RGB(A)
+        whose colour channels agree (Blender's File Output node: R = G = B = Z); or several named
+        channels, of which ``channel`` or the one named like a depth pass
+        (:data:`DEPTH_CHANNEL_NAMES`, e.g. Blender's multilayer ``ViewLayer.Depth.Z``) is taken.
     scale : float, optional
-        Scene units per stored unit. Required for integer files; multiplies float files (default 1).
+        Scene units per stored unit. Required for integer files (``0.001`` for millimetre PNGs of
+        depth cameras, ``1/5000`` for TUM RGB-D); multiplies float files (default 1).
+    channel : str, optional
+        Channel name (exact, or the part after the last layer dot: ``"Depth.Z"`` finds
+        ``ViewLayer.Depth.Z``).
 
     Returns
     -------
     (H, W) float32, row 0 at the top, NaN where invalid.
     """
-    a = read_image(path, what=what)
-    if a.ndim != 2:
-        raise ValueError(f"{what}: expected a single-channel depth image, {path} has {a.shape[2]} channels")
+    if channel is not None and (not isinstance(channel, str) or not channel):
+        raise ValueError(f"{what}: channel must be a non-empty string, got {channel!r}")
     if scale is not None and not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
         raise ValueError(f"{what}: scale must be a positive number, got {scale!r}")
+    a = _depth_array(Path(path), channel, what)
     if a.dtype.kind in "ui":
         if scale is None:
             raise ValueError(f"{what}: {path} stores integer codes ({a.dtype}); give `scale` "

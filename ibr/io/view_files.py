@@ -30,7 +30,7 @@ from ..base import depth as _depth
 from ..base.camera import Camera
 from ..base.validate import check_keys, check_relative_path, nearest_name
 from ..base.view import View
-from .images import _check_write_dtype, _require_file, atomic_path, read_depth, read_image, write_depth, write_image
+from .images import _check_write_dtype, _depth_array, _require_file, atomic_path, read_depth, read_image, write_depth, write_image
 
 __all__ = ["DEPTH_ENCODINGS", "VIEW_FORMAT", "VIEW_KEYS", "VIEW_VERSION", "load_camera", "load_view", "save_view",
            "view_to_dict"]
@@ -155,17 +155,15 @@ def _encode_depth(z: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.n
     return q
 
 
-def _read_stored_depth(path: Path, encoding: str, p: dict, where: str) -> np.ndarray:
+def _read_stored_depth(path: Path, encoding: str, p: dict, where: str, channel: str | None = None) -> np.ndarray:
     if encoding in _FIXED_BITS:
-        raw = read_image(path, what=where)
-        if raw.ndim != 2:
-            raise ValueError(f"{where}: expected a single-channel depth image, {path} has {raw.shape[2]} channels")
+        raw = _depth_array(path, channel, where)
         if raw.dtype.kind == "f":  # codes stored in a float file must be integers
             if not np.all(np.isfinite(raw) & (raw == np.rint(raw)) & (raw >= 0)):
                 raise ValueError(f"{where}: {path} must hold non-negative integer codes for {encoding!r}")
             raw = raw.astype(np.uint32)
         return raw
-    return read_depth(path, scale=p.get("scale"), what=where)
+    return read_depth(path, scale=p.get("scale"), channel=channel, what=where)
 
 
 def _json_number(x: float):
@@ -237,12 +235,15 @@ def load_view(path) -> View:
             raise ValueError(f"{dwhere} must be null or an object with a 'path' string, got {spec!r}")
         check_relative_path(f"{dwhere}: 'path'", spec["path"])
         encoding = spec.get("encoding", "z")
-        params = {k: v for k, v in spec.items() if k not in ("path", "encoding")}
+        channel = spec.get("channel")
+        if channel is not None and (not isinstance(channel, str) or not channel):
+            raise ValueError(f"{dwhere}: 'channel' must be a channel name such as \"ViewLayer.Depth.Z\", got {channel!r}")
+        params = {k: v for k, v in spec.items() if k not in ("path", "encoding", "channel")}
         p = _check_depth_params(encoding, params, dwhere)
         depth_path = path.parent / spec["path"]
         if not depth_path.is_file():
             raise FileNotFoundError(f"{where}: 'depth.path' refers to a missing file {depth_path}")
-        stored = _read_stored_depth(depth_path, encoding, p, f"{where}: 'depth.path'")
+        stored = _read_stored_depth(depth_path, encoding, p, f"{where}: 'depth.path'", channel)
         if stored.shape != color.shape[:2]:
             raise ValueError(f"{where}: depth {depth_path.name} is {stored.shape[1]}x{stored.shape[0]} but color "
                              f"{color_path.name} is {color.shape[1]}x{color.shape[0]}")
