@@ -268,9 +268,16 @@ def write_image(path, array) -> None:
 
 
 # --------------------------------------------------------------------------- depth files
-#: Channel names other tools give a depth pass, tried in this order when a file has several
-#: channels and none is named: Blender's multilayer EXR (``ViewLayer.Depth.Z``, ``Depth.Z``), a
-#: plain ``Z``/``depth`` channel, ``depth.V`` / ``distance.Y`` (Nuke-style layer.channel names).
+#: Channel names other tools give a depth pass, tried in this order (case-insensitive, also after
+#: a layer prefix) when a file has several channels and none is named: Blender's multilayer render
+#: output (``ViewLayer.Depth.Z``), a plain ``Z``/``depth`` channel, ``Depth.V`` (Blender's File
+#: Output node, multilayer, slot "Depth"), ``distance.Y`` (Nuke-style layer.channel names).
+#: Stored float depth equal to this is "no surface" (Blender's Cycles Z pass writes exactly 1e10
+#: there; other huge values stay errors of the view's depth range).
+BACKGROUND_DEPTH = 1e10
+#: The largest half float: EEVEE's Z pass (half precision) saturates there where there is no surface.
+HALF_MAX = 65504.0
+
 DEPTH_CHANNEL_NAMES = ("Depth.Z", "Z", "depth", "Depth", "depth.V", "depth.Y", "distance.Y", "Y", "V")
 
 
@@ -304,8 +311,9 @@ def _pick_depth_channel(names: list[str], channel: str | None, path: Path, what:
                          f"{f' (did you mean {near!r}?)' if near else ''}; it has {', '.join(names)}")
     if len(names) == 1:
         return 0
-    for want in DEPTH_CHANNEL_NAMES:  # Blender: "ViewLayer.Depth.Z" ends with ".Depth.Z"
-        hits = [i for i, n in enumerate(names) if n == want or n.endswith("." + want)]
+    low = [n.lower() for n in names]
+    for want in (w.lower() for w in DEPTH_CHANNEL_NAMES):  # "ViewLayer.Depth.Z" ends with ".depth.z"
+        hits = [i for i, n in enumerate(low) if n == want or n.endswith("." + want)]
         if len(hits) == 1:
             return hits[0]
     return None
@@ -347,7 +355,8 @@ def read_depth(path, *, scale: float | None = None, channel: str | None = None,
     Parameters
     ----------
     path : str or Path
-        Float ``.exr``/``.tif``/``.pfm`` (values as stored; NaN and +-inf become NaN) or integer
+        Float ``.exr``/``.tif``/``.pfm`` (values as stored; NaN, +-inf, exactly 1e10 and 65504 --
+        Blender's background, Cycles / EEVEE -- become NaN) or integer
         ``.png``/``.tif`` (``value = code * scale``, code 0 becomes NaN). Single channel; or RGB(A)
         whose colour channels agree (Blender's File Output node: R = G = B = Z); or several named
         channels, of which ``channel`` or the one named like a depth pass
@@ -375,9 +384,10 @@ def read_depth(path, *, scale: float | None = None, channel: str | None = None,
         out = a.astype(np.float64) * scale
         out[a == 0] = np.nan
         return out.astype(np.float32)
-    out = a.astype(np.float32) * np.float32(1.0 if scale is None else scale)
-    out[~np.isfinite(out)] = np.nan
-    return out
+    out = a.astype(np.float32)
+    # Blender's Z pass where there is no surface: 1e10 (Cycles), the half-float maximum (EEVEE)
+    out[~np.isfinite(out) | (out == BACKGROUND_DEPTH) | (out == HALF_MAX)] = np.nan
+    return out * np.float32(1.0 if scale is None else scale)
 
 
 def write_depth(path, z, *, scale: float | None = None) -> None:

@@ -1,0 +1,102 @@
+"""``ibr import``: other tools' RGB-D data -> view files; ``ibr import export-nerf``: view files ->
+transforms.json; ``ibr import blender --script``: the path of the script to run inside Blender.
+
+Thin: parses, calls :mod:`ibr.io.importers`, writes through one
+:class:`ibr.io.outputs.OutputPlan` (the output folder staged, nothing written on failure, never
+onto an input), prints the report (frames written, dropped and why, ignored keys).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ._common import info, positive_float
+
+HELP = ("import RGB-D data from other tools (NeRF transforms.json, COLMAP, TUM RGB-D; Blender via a script) "
+        "as view files, or export view files as transforms.json")
+
+_PATTERNS = ("*.json", "*_color.png", "*_color.exr", "*_depth.exr")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("format", choices=("nerf", "colmap", "tum", "blender", "export-nerf"),
+                        help="nerf: SRC is a transforms.json; colmap: SRC is the folder of cameras.txt and "
+                        "images.txt; tum: SRC is a TUM RGB-D sequence folder; blender: see --script; "
+                        "export-nerf: SRC are view files, --out the transforms.json to write")
+    parser.add_argument("src", nargs="*", metavar="SRC")
+    parser.add_argument("--out", help="folder for the view files (new, or only its view files are replaced); "
+                        "for export-nerf the transforms.json file")
+    parser.add_argument("--script", action="store_true",
+                        help="blender: print the path of the script to run inside Blender "
+                        "(blender -b scene.blend --python PATH -- --out DIR [--all-cameras] [--multilayer])")
+    parser.add_argument("--images", help="colmap: the image folder (default: SRC/../images)")
+    parser.add_argument("--depth", help="colmap: folder of depth maps (NAME.geometric.bin or <stem>.exr/.png)")
+    parser.add_argument("--depth-scale", type=positive_float, default=None,
+                        help="scene units per stored depth unit (e.g. 0.001 for millimetre PNGs)")
+    parser.add_argument("--intrinsics", type=float, nargs=4, metavar=("FX", "FY", "CX", "CY"),
+                        help="tum: camera intrinsics in pixels (default the ROS set 525 525 319.5 239.5)")
+    parser.add_argument("--tolerance", type=positive_float, default=0.02,
+                        help="tum: max time difference (s) when associating colour, depth and poses")
+    parser.add_argument("--name", default=None, help="name of the sequence manifest (default: the format)")
+
+
+def _export(args) -> int:
+    from ibr.io.importers import export_nerf
+    from ibr.io.outputs import OutputPlan
+
+    if not args.src:
+        raise ValueError("SRC: export-nerf needs view files")
+    if args.out is None:
+        raise ValueError("--out: export-nerf needs the transforms.json to write")
+    with OutputPlan("ibr import", log=info) as plan:
+        for s in args.src:
+            plan.add_input("SRC", s)
+        out = plan.add_file("--out", args.out, (".json",))
+        plan.check()
+        notes = export_nerf(args.src, plan.stage(out), base=Path(args.out).resolve().parent)
+        plan.commit()
+    for note in notes:
+        info(f"import: {note}")
+    import json
+
+    info(f"import: wrote {args.out} ({len(json.loads(Path(args.out).read_text())['frames'])} frames)")
+    return 0
+
+
+def run(args) -> int:
+    from ibr.io.importers import blender_script_path, import_views, read_frames, write_views
+    from ibr.io.importers.common import ImportReport
+    from ibr.io.outputs import OutputPlan
+
+    if args.format == "blender":
+        if not args.script:
+            raise ValueError("blender: renders are imported by the script run inside Blender; "
+                             "`ibr import blender --script` prints its path")
+        print(blender_script_path())
+        return 0
+    if args.format == "export-nerf":
+        return _export(args)
+    if len(args.src) != 1:
+        raise ValueError(f"SRC: {args.format} takes one source, got {len(args.src)}")
+    if args.out is None:
+        raise ValueError("--out: the folder for the view files is required")
+    report = ImportReport()
+    options = {"depth_scale": args.depth_scale}
+    if args.format == "colmap":
+        options.update(images=args.images, depth=args.depth)
+    if args.format == "tum":
+        options.update(intrinsics=args.intrinsics, tolerance=args.tolerance)
+    frames = read_frames(args.format, args.src[0], report=report, **options)  # every entry checked first
+    with OutputPlan("ibr import", log=info) as plan:
+        plan.add_input("SRC", args.src[0])
+        for f in frames:
+            plan.add_input("SRC", f.color)
+            plan.add_input("SRC", f.depth)
+        folder = plan.add_folder("--out", args.out, _PATTERNS)
+        plan.check()
+        write_views(frames, plan.stage(folder), report, sequence_name=args.name or args.format,
+                    progress=lambda k, n: info(f"import: {k}/{n} frames") if k == n or k % 10 == 0 else None)
+        plan.commit()
+    for line in report.lines():
+        info(f"import: {line}")
+    return 0

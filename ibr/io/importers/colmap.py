@@ -1,0 +1,161 @@
+"""COLMAP text models (``cameras.txt``, ``images.txt``) and depth maps -> frames.
+
+``cameras.txt``: ``CAMERA_ID MODEL WIDTH HEIGHT PARAMS...`` with models SIMPLE_PINHOLE
+(``f cx cy``), PINHOLE (``fx fy cx cy``) and OPENCV (``fx fy cx cy k1 k2 p1 p2``: the images and
+depth maps are undistorted on import with ``cv2.undistort``, keeping the same K).
+``images.txt``: two lines per image, ``IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME`` (the
+world-to-camera rotation and translation, camera axes as ours) and the 2-D points (ignored).
+Principal points are continuous pixel coordinates (top-left pixel centre at 0.5): ours = cx - 0.5.
+
+Depth: ``depth_dir`` holding, per image ``NAME``, COLMAP's dense ``NAME.geometric.bin`` or
+``NAME.photometric.bin`` (``width&height&channels&`` then float32 in column-major order; planar z,
+0 = none) or an image ``<stem>.exr``/``.png``/``.tif`` (planar z, times ``depth_scale``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...base.camera import Camera
+from .common import Frame, ImportReport
+from .conventions import pose_from_world_to_camera, rotation_from_quaternion
+
+__all__ = ["MODELS", "read_colmap", "read_colmap_depth"]
+
+#: Supported camera models and their parameter counts.
+MODELS = {"SIMPLE_PINHOLE": 3, "PINHOLE": 4, "OPENCV": 8}
+
+
+def _lines(path: Path):
+    if not path.is_file():
+        raise FileNotFoundError(f"colmap: missing {path}")
+    for n, line in enumerate(path.read_text().splitlines(), 1):
+        yield n, line
+
+
+def read_cameras(path: Path) -> dict[int, tuple[str, int, int, list[float]]]:
+    cams = {}
+    for n, line in _lines(path):
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        parts = s.split()
+        where = f"colmap {path.name} line {n}"
+        if len(parts) < 4:
+            raise ValueError(f"{where}: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..., got {s!r}")
+        model = parts[1]
+        if model not in MODELS:
+            raise ValueError(f"{where}: camera {parts[0]} has model {model!r}, not supported "
+                             f"(supported: {', '.join(MODELS)}; undistort other models with COLMAP first)")
+        try:
+            cid, w, h = int(parts[0]), int(parts[2]), int(parts[3])
+            params = [float(x) for x in parts[4:]]
+        except ValueError:
+            raise ValueError(f"{where}: bad numbers in {s!r}") from None
+        if len(params) != MODELS[model]:
+            raise ValueError(f"{where}: {model} takes {MODELS[model]} parameters, got {len(params)}")
+        cams[cid] = (model, w, h, params)
+    return cams
+
+
+def _intrinsics(model: str, params: list[float]):
+    if model == "SIMPLE_PINHOLE":
+        f, cx, cy = params
+        return f, f, cx, cy, None
+    fx, fy, cx, cy = params[:4]
+    dist = np.array(params[4:8]) if model == "OPENCV" else None
+    return fx, fy, cx, cy, dist
+
+
+def _undistorter(k: np.ndarray, dist: np.ndarray):
+    import cv2
+
+    def undistort(img: np.ndarray) -> np.ndarray:
+        if img.dtype.kind == "f" and img.ndim == 2:  # depth: nearest, so no depth is invented at edges
+            h, w = img.shape
+            m1, m2 = cv2.initUndistortRectifyMap(k, dist, None, k, (w, h), cv2.CV_32FC1)
+            return cv2.remap(img, m1, m2, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+        return cv2.undistort(img, k, dist)
+
+    return undistort
+
+
+def read_colmap_depth(path) -> np.ndarray:
+    """(H, W) float32 of a COLMAP dense depth map ``*.bin`` (0 -> NaN)."""
+    path = Path(path)
+    raw = path.read_bytes()
+    head = raw.split(b"&", 3)
+    try:
+        w, h, c = int(head[0]), int(head[1]), int(head[2])
+    except (ValueError, IndexError):
+        raise ValueError(f"colmap depth: {path} does not start with 'width&height&channels&'") from None
+    data = np.frombuffer(head[3], np.float32)
+    if data.size != w * h * c or c != 1:
+        raise ValueError(f"colmap depth: {path} holds {data.size} values, header says {w}x{h}x{c}")
+    z = data.reshape((w, h), order="F").T.copy()
+    z[~(z > 0)] = np.nan
+    return z
+
+
+def read_colmap(model_dir, image_dir, *, depth_dir=None, depth_scale: float | None = None,
+                report: ImportReport | None = None) -> list[Frame]:
+    """Frames of a COLMAP text model (see the module docstring), in ``images.txt`` order."""
+    model_dir, image_dir = Path(model_dir), Path(image_dir)
+    cams = read_cameras(model_dir / "cameras.txt")
+    frames = []
+    lines = [(n, l.strip()) for n, l in _lines(model_dir / "images.txt") if not l.strip().startswith("#")]
+    k = 0
+    while k < len(lines):
+        n, s = lines[k]
+        if not s:
+            k += 1
+            continue
+        parts = s.split()
+        where = f"colmap images.txt line {n}"
+        if len(parts) < 10:
+            raise ValueError(f"{where}: expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME, got {s!r}")
+        try:
+            qw, qx, qy, qz, tx, ty, tz = (float(x) for x in parts[1:8])
+            cid = int(parts[8])
+        except ValueError:
+            raise ValueError(f"{where}: bad numbers in {s!r}") from None
+        name = " ".join(parts[9:])
+        k += 2  # the POINTS2D line follows (possibly empty)
+        if cid not in cams:
+            raise ValueError(f"{where}: image {name!r} uses camera {cid}, which cameras.txt does not define")
+        model, w, h, params = cams[cid]
+        fx, fy, cx, cy, dist = _intrinsics(model, params)
+        pose = pose_from_world_to_camera(rotation_from_quaternion(qw, qx, qy, qz), (tx, ty, tz))
+        cam = Camera(fx, fy, cx - 0.5, cy - 0.5, w, h, pose)
+        color = image_dir / name
+        if not color.is_file():
+            raise FileNotFoundError(f"{where}: image {name!r} is not in {image_dir}")
+        depth, scale = None, depth_scale
+        if depth_dir is not None:
+            depth = _depth_file(Path(depth_dir), name)
+            if depth is None:
+                if report is not None:
+                    report.dropped.append((name, f"no depth map for it in {depth_dir}"))
+                continue
+        undistort = None
+        if dist is not None and np.any(dist != 0):
+            kk = np.array([[fx, 0, cx - 0.5], [0, fy, cy - 0.5], [0, 0, 1]])
+            undistort = _undistorter(kk, dist)
+        reader = read_colmap_depth if depth is not None and depth.suffix == ".bin" else None
+        frames.append(Frame(Path(name).stem, color, cam, depth, scale, None, undistort, reader))
+    if not frames:
+        raise ValueError(f"colmap: no usable image in {model_dir / 'images.txt'}")
+    return frames
+
+
+def _depth_file(folder: Path, name: str) -> Path | None:
+    for cand in (folder / f"{name}.geometric.bin", folder / f"{name}.photometric.bin"):
+        if cand.is_file():
+            return cand
+    stem = Path(name).stem
+    for ext in (".exr", ".png", ".tif", ".tiff", ".pfm"):
+        if (folder / (stem + ext)).is_file():
+            return folder / (stem + ext)
+    return None

@@ -1,0 +1,116 @@
+"""What every importer shares: a frame record, strict-but-tolerant key checks, the import report,
+and writing view files (and a sequence manifest) into the output folder."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+from ...base.camera import Camera
+from ...base.validate import nearest_name
+from ...base.view import View
+from ..images import read_depth, read_image
+from ..view_files import save_view
+
+__all__ = ["Frame", "ImportReport", "check_foreign_keys", "write_views"]
+
+#: The sequence manifest format of ``ibr.sequence`` (``docs/sequences.md``), written here for
+#: imports of many frames (``ibr.io`` may not import ``ibr.sequence``).
+SEQUENCE_FORMAT = "ibr-sequence"
+
+
+@dataclass
+class Frame:
+    """One imported frame: where its images are and its camera (our conventions)."""
+
+    name: str
+    color: Path
+    camera: Camera
+    depth: Path | None = None
+    depth_scale: float | None = None  # scene units per stored unit (integer files need it)
+    depth_channel: str | None = None
+    undistort: Callable[[np.ndarray], np.ndarray] | None = None  # applied to colour and depth
+    depth_reader: Callable[[Path], np.ndarray] | None = None  # a tool's own depth format (COLMAP .bin)
+
+
+@dataclass
+class ImportReport:
+    """What an import did: frames written, frames dropped and why, keys ignored."""
+
+    written: list[Path] = field(default_factory=list)
+    dropped: list[tuple[str, str]] = field(default_factory=list)
+    ignored_keys: list[str] = field(default_factory=list)
+    sequence: Path | None = None
+
+    def lines(self) -> list[str]:
+        out = [f"{len(self.written)} view file(s) written"
+               + (f", sequence {self.sequence.name}" if self.sequence else "")]
+        out += [f"dropped {name}: {why}" for name, why in self.dropped]
+        if self.ignored_keys:
+            out.append("ignored keys (not used by ibr): " + ", ".join(sorted(set(self.ignored_keys))))
+        return out
+
+
+def check_foreign_keys(where: str, doc: dict, used: Iterable[str], report: ImportReport | None) -> None:
+    """Other tools' files carry keys we do not need (ignored, and listed in the report); a key
+    that is a near miss of one we read is a misspelling and refused with the nearest name."""
+    used = tuple(used)
+    for key in doc:
+        if key in used:
+            continue
+        near = nearest_name(key, used)
+        if near is not None:
+            raise ValueError(f"{where}: unknown key {key!r} (did you mean {near!r}?)")
+        if report is not None:
+            report.ignored_keys.append(key)
+
+
+def _load_frame(f: Frame) -> View:
+    color = read_image(f.color, what=f"{f.name}: colour")
+    depth = None
+    if f.depth is not None:
+        if f.depth_reader is not None:
+            depth = f.depth_reader(f.depth) * np.float32(1.0 if f.depth_scale is None else f.depth_scale)
+        else:
+            depth = read_depth(f.depth, scale=f.depth_scale, channel=f.depth_channel, what=f"{f.name}: depth")
+        if depth.shape != color.shape[:2]:
+            raise ValueError(f"{f.name}: depth {f.depth.name} is {depth.shape[1]}x{depth.shape[0]} but colour "
+                             f"{f.color.name} is {color.shape[1]}x{color.shape[0]}")
+    if color.shape[:2] != f.camera.shape:
+        raise ValueError(f"{f.name}: colour {f.color.name} is {color.shape[1]}x{color.shape[0]} but its camera is "
+                         f"{f.camera.width}x{f.camera.height}")
+    if f.undistort is not None:
+        color = f.undistort(color)
+        depth = None if depth is None else f.undistort(depth)
+    return View(color, depth, f.camera, f.name)
+
+
+def write_views(frames: list[Frame], folder: Path, report: ImportReport, *, sequence_name: str | None = None,
+                progress=None) -> ImportReport:
+    """Load every frame and write ``<name>.json`` (+ PNG colour, EXR depth) into ``folder``; with
+    more than one frame and ``sequence_name``, also ``<sequence_name>.json``, a sequence manifest
+    in the frames' order."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    names = [f.name for f in frames]
+    if len(set(names)) != len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})[0]
+        raise ValueError(f"frames: two frames would be written as {dup!r}.json")
+    for k, f in enumerate(frames):
+        view = _load_frame(f)
+        path = folder / f"{f.name}.json"
+        save_view(view, path)
+        report.written.append(path)
+        if progress is not None:
+            progress(k + 1, len(frames))
+    if sequence_name and len(frames) > 1:
+        seq = folder / f"{sequence_name}.json"
+        doc = {"format": SEQUENCE_FORMAT, "version": 1, "name": sequence_name,
+               "views": [p.name for p in report.written]}
+        seq.write_text(json.dumps(doc, indent=2) + "\n")
+        report.sequence = seq
+    return report

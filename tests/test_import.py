@@ -1,0 +1,273 @@
+"""Importing other tools' data (issue #19): a Blender-made pair (tests/data/import, rendered by the
+shipped script with Debian's Blender 3.4, EEVEE) loaded through every path -- the script's own
+view files (RGB depth EXR and multilayer EXR), its transforms.json, a COLMAP model and a TUM
+sequence of the same pair -- warps exactly like the pair converted by hand; worked numbers per
+format (docs/import.md); round trips; bad inputs named with the file and the entry."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+
+import numpy as np
+import pytest
+
+import cli
+from ibr import Camera, View, load_view, warp
+from ibr.io import read_depth, read_image, write_image
+from ibr.io.importers import blender_script_path, export_nerf, import_views, read_frames
+from ibr.io.importers import blender_script as bs
+from ibr.io.importers.colmap import read_cameras, read_colmap_depth
+from ibr.io.importers.conventions import (ours_from_gl, pose_from_world_to_camera, quaternion_from_rotation,
+                                          rotation_from_quaternion)
+from ibr.io.importers.tum import associate
+from samples import DATA_DIR  # noqa: F401  (the package's sample data are not used here)
+from pathlib import Path
+
+DATA = Path(__file__).parent / "data" / "import"
+RGB, ML = DATA / "blender_rgb", DATA / "blender_multilayer"
+NAMES = ("camA_0001", "camB_0001")
+# The scene's raw Blender values (tests/data/import/make_blender_scene.py): lens 35 mm, sensor
+# 36 mm (fit AUTO), 64 x 48, rotation_euler (75 deg, 0, 0), locations; camB has shift_x 0.02.
+RAW = {"camA_0001": ((0.15, -3.0, 1.4), 0.0), "camB_0001": ((-0.15, -3.0, 1.4), 0.02)}
+
+
+def _by_hand(name: str) -> Camera:
+    """The camera converted by hand from the Blender values, without the importers."""
+    loc, shift = RAW[name]
+    a = math.radians(75.0)
+    rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+    pose = np.eye(4)
+    pose[:3, :3] = rx @ np.diag([1.0, -1.0, -1.0])  # Blender camera looks down -Z, +Y up
+    pose[:3, 3] = loc
+    f = 35.0 / 36.0 * 64
+    return Camera(f, f, 32.0 - shift * 64 - 0.5, 24.0 - 0.5, 64, 48, pose)
+
+
+def _hand_pair():
+    views = []
+    for n in NAMES:
+        color = read_image(RGB / f"{n}_color.png")
+        z = read_image(RGB / f"{n}_depth.exr")[..., 0].copy()  # R = G = B = Z
+        z[(z >= 65504) | ~np.isfinite(z)] = np.nan  # EEVEE's background
+        views.append(View(color, z, _by_hand(n), n))
+    return views
+
+
+def _psnr_a_to_b(a: View, b: View) -> float:
+    r = warp(a, b.camera)
+    m = ~r.holes
+    d = r.color[m].astype(np.float64) - b.color[m].astype(np.float64)
+    return float(10 * np.log10(255.0**2 / np.mean(d * d)))
+
+
+@pytest.fixture(scope="module")
+def hand_psnr():
+    a, b = _hand_pair()
+    return _psnr_a_to_b(a, b)
+
+
+def test_worked_numbers():
+    """docs/import.md: camA sees the world point (0.3, 0.2, 0.5) -- the cube's centre -- at the
+    pixel below, by each convention."""
+    cam = load_view(RGB / "camA_0001.json").camera
+    (u, v), z = (x[0] for x in cam.project(np.array([[0.3, 0.2, 0.5]])))
+    hand = _by_hand("camA_0001")
+    (uh, vh), _ = (x[0] for x in hand.project(np.array([[0.3, 0.2, 0.5]])))
+    assert (u, v) == pytest.approx((uh, vh), abs=1e-5)
+    # by hand (docs/import.md): d = P - C = (0.15, 3.2, -0.9); camera axes x = (1, 0, 0),
+    # y = (0, -cos 75, -sin 75), z = (0, sin 75, -cos 75): (0.15, 0.04111, 3.32390) -> f = 35/36*64
+    assert (round(u, 2), round(v, 2), round(z, 3)) == (34.31, 24.27, 3.324)
+    # Blender intrinsics: 35 mm lens on a 36 mm sensor spanning 64 px; lens shift moves cx
+    assert bs.intrinsics(35, 36, 24, "AUTO", 64, 48) == pytest.approx((62.2222222, 62.2222222, 31.5, 23.5))
+    assert bs.intrinsics(35, 36, 24, "AUTO", 64, 48, shift_x=0.02)[2] == pytest.approx(30.22)
+    assert bs.intrinsics(35, 36, 24, "VERTICAL", 64, 48)[0] == pytest.approx(35 / 24 * 48)
+    # OpenGL -> ours flips y and z of the camera axes
+    gl = np.eye(4)
+    assert np.array_equal(ours_from_gl(gl), np.diag([1.0, -1.0, -1.0, 1.0]))
+    # COLMAP's world-to-camera (q, t) -> world_from_cam: the camera centre is -R^T t
+    r = rotation_from_quaternion(0.851773, 0.0165051, 0.503764, -0.142941)
+    pose = pose_from_world_to_camera(r, (-0.737434, 1.02973, 3.74354))
+    np.testing.assert_allclose(pose[:3, 3], -r.T @ np.array([-0.737434, 1.02973, 3.74354]))
+    np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-5)
+
+
+def test_blender_script_views_match_the_hand_conversion(hand_psnr):
+    """The script's view files (RGB EXR depth, and multilayer EXR with its "channel" key) warp to
+    the same PSNR as the pair converted by hand (+-0.01 dB), and the depth is planar z: the floor
+    rows back-project to world z = 0 (half-float precision)."""
+    assert 25 < hand_psnr < 50
+    for folder in (RGB, ML):
+        a, b = (load_view(folder / f"{n}.json") for n in NAMES)
+        assert abs(_psnr_a_to_b(a, b) - hand_psnr) <= 0.01
+        for v in (a, b):
+            assert v.camera.world_from_cam == pytest.approx(_by_hand(v.name).world_from_cam, abs=1e-6)
+    a = load_view(RGB / "camA_0001.json")
+    vv, uu = np.mgrid[44:48, 0:64]
+    z = a.depth[44:48]
+    pts = np.stack([(uu - a.camera.cx) / a.camera.fx * z, (vv - a.camera.cy) / a.camera.fy * z, z, np.ones_like(z)], -1)
+    world_z = (pts @ a.camera.world_from_cam.T)[..., 2]
+    assert np.abs(world_z).max() < 3e-3 and np.isnan(a.depth).any()  # background -> NaN
+
+
+def test_nerf_transforms_import_export_round_trip(tmp_path, hand_psnr):
+    rep = import_views("nerf", RGB / "transforms.json", tmp_path / "nerf")
+    assert [p.name for p in rep.written] == ["camB_0001.json", "camA_0001.json"] and rep.sequence.name == "nerf.json"
+    a, b = (load_view(tmp_path / "nerf" / f"{n}.json") for n in NAMES)
+    assert abs(_psnr_a_to_b(a, b) - hand_psnr) <= 0.01
+    notes = export_nerf([tmp_path / "nerf" / "nerf.json"], tmp_path / "t.json")  # a manifest stands for its views
+    assert notes == []
+    doc = json.loads((tmp_path / "t.json").read_text())
+    assert len(doc["frames"]) == 2 and doc["depth_unit_scale_factor"] == 1.0
+    import_views("nerf", tmp_path / "t.json", tmp_path / "again")
+    for n in NAMES:
+        x, y = load_view(tmp_path / "nerf" / f"{n}.json"), load_view(tmp_path / "again" / f"{n}.json")
+        assert np.array_equal(x.color, y.color) and np.array_equal(x.depth, y.depth, equal_nan=True)
+        assert (x.camera.fx, x.camera.fy, x.camera.cx, x.camera.cy) == (y.camera.fx, y.camera.fy, y.camera.cx, y.camera.cy)
+        assert np.array_equal(x.camera.world_from_cam, y.camera.world_from_cam)
+
+
+def _colmap_model(folder: Path) -> None:
+    """The Blender pair as a COLMAP text model, written by hand from the raw Blender values."""
+    (folder / "sparse").mkdir(parents=True)
+    (folder / "images").mkdir()
+    cams, imgs = ["# Camera list with one line of data per camera:"], ["# Image list with two lines of data per image:"]
+    for k, n in enumerate(NAMES, 1):
+        c = _by_hand(n)
+        rot = c.world_from_cam[:3, :3].T  # world-to-camera
+        t = [float(x) for x in -rot @ c.world_from_cam[:3, 3]]
+        q = quaternion_from_rotation(rot)
+        cams.append(f"{k} PINHOLE 64 48 {c.fx!r} {c.fy!r} {c.cx + 0.5!r} {c.cy + 0.5!r}")
+        imgs.append(f"{k} {q[0]!r} {q[1]!r} {q[2]!r} {q[3]!r} {t[0]!r} {t[1]!r} {t[2]!r} {k} {n}.png")
+        imgs.append("")  # no 2-D points
+        shutil.copy(RGB / f"{n}_color.png", folder / "images" / f"{n}.png")
+        shutil.copy(RGB / f"{n}_depth.exr", folder / "depth" / f"{n}.exr") if (folder / "depth").is_dir() else None
+    (folder / "sparse" / "cameras.txt").write_text("\n".join(cams) + "\n")
+    (folder / "sparse" / "images.txt").write_text("\n".join(imgs) + "\n")
+
+
+def test_colmap_model_with_depth(tmp_path, hand_psnr):
+    (tmp_path / "depth").mkdir()
+    _colmap_model(tmp_path)
+    rep = import_views("colmap", tmp_path / "sparse", tmp_path / "out", depth=tmp_path / "depth")
+    assert len(rep.written) == 2
+    a, b = (load_view(tmp_path / "out" / f"{n}.json") for n in NAMES)
+    assert abs(_psnr_a_to_b(a, b) - hand_psnr) <= 0.01
+    # COLMAP's dense .bin depth maps (column-major float32 after a text header)
+    z = load_view(RGB / "camA_0001.json").depth
+    raw = np.nan_to_num(z, nan=0.0).astype(np.float32)
+    # COLMAP writes the (W, H) array in Fortran order: x fastest, i.e. the image row by row
+    (tmp_path / "camA_0001.png.geometric.bin").write_bytes(b"64&48&1&" + raw.tobytes())
+    np.testing.assert_array_equal(read_colmap_depth(tmp_path / "camA_0001.png.geometric.bin"), z)
+
+
+def test_colmap_docs_example_and_unsupported_model(tmp_path):
+    """COLMAP's own cameras.txt example: PINHOLE and SIMPLE_PINHOLE read, SIMPLE_RADIAL refused."""
+    text = ("# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
+            "# Number of cameras: 3\n1 SIMPLE_PINHOLE 3072 2304 2559.81 1536 1152\n"
+            "2 PINHOLE 3072 2304 2560.56 2560.56 1536 1152\n")
+    (tmp_path / "cameras.txt").write_text(text)
+    cams = read_cameras(tmp_path / "cameras.txt")
+    assert cams[1] == ("SIMPLE_PINHOLE", 3072, 2304, [2559.81, 1536.0, 1152.0])
+    (tmp_path / "cameras.txt").write_text(text + "3 SIMPLE_RADIAL 3072 2304 2559.69 1536 1152 -0.0218531\n")
+    with pytest.raises(ValueError, match=r"cameras.txt line 6: camera 3 has model 'SIMPLE_RADIAL', not supported"):
+        read_cameras(tmp_path / "cameras.txt")
+
+
+def test_opencv_model_is_undistorted(tmp_path):
+    """An OPENCV camera with distortion: the imported colour equals cv2.undistort of the photo."""
+    import cv2
+
+    _colmap_model(tmp_path)
+    cam_line = (tmp_path / "sparse" / "cameras.txt").read_text().splitlines()
+    parts = cam_line[1].split()
+    cam_line[1] = " ".join(["1", "OPENCV"] + parts[2:] + ["-0.2", "0.05", "0.001", "0.0"])
+    (tmp_path / "sparse" / "cameras.txt").write_text("\n".join(cam_line) + "\n")
+    import_views("colmap", tmp_path / "sparse", tmp_path / "out")
+    got = load_view(tmp_path / "out" / "camA_0001.json").color
+    src = read_image(tmp_path / "images" / "camA_0001.png")
+    c = _by_hand("camA_0001")
+    k = np.array([[c.fx, 0, c.cx], [0, c.fy, c.cy], [0, 0, 1]])
+    want = cv2.undistort(src, k, np.array([-0.2, 0.05, 0.001, 0.0]))
+    assert np.array_equal(got, want) and not np.array_equal(got, src)
+
+
+def _tum(folder: Path) -> None:
+    folder.mkdir()
+    rgb, dep, gt = ["# color images"], ["# depth images"], ["# ground truth trajectory"]
+    for k, n in enumerate(NAMES):
+        t = 1305031102.175304 + k * 0.5
+        c = _by_hand(n)
+        shutil.copy(RGB / f"{n}_color.png", folder / f"rgb_{k}.png")
+        z = load_view(RGB / f"{n}.json").depth
+        write_image(folder / f"depth_{k}.png", np.where(np.isfinite(z), np.rint(z * 5000), 0).astype(np.uint16))
+        rgb.append(f"{t:.6f} rgb_{k}.png")
+        dep.append(f"{t + 0.011:.6f} depth_{k}.png")
+        x, y, zq, w = quaternion_from_rotation(c.world_from_cam[:3, :3])[1:] + quaternion_from_rotation(c.world_from_cam[:3, :3])[:1]
+        px, py, pz = (float(p) for p in c.position)
+        gt.append(f"{t - 0.004:.4f} {px!r} {py!r} {pz!r} {x!r} {y!r} {zq!r} {w!r}")
+    rgb.append(f"{1305031102.175304 + 5:.6f} rgb_0.png")  # a frame with no depth nor pose near it
+    for name, lines in (("rgb.txt", rgb), ("depth.txt", dep), ("groundtruth.txt", gt)):
+        (folder / name).write_text("\n".join(lines) + "\n")
+
+
+def test_tum_sequence(tmp_path, hand_psnr):
+    _tum(tmp_path / "tum")
+    c = _by_hand("camA_0001")
+    rep = import_views("tum", tmp_path / "tum", tmp_path / "out", intrinsics=(c.fx, c.fy, 31.5, 23.5))
+    assert len(rep.written) == 2 and rep.sequence is not None
+    assert rep.dropped == [("rgb_0.png", "no depth and pose within 0.02 s of t = 1305031107.175304")]
+    a, b = (load_view(p) for p in rep.written)
+    # camB's lens shift is not in TUM's single intrinsics set: compare A -> B with B's true camera
+    b = View(b.color, b.depth, _by_hand("camB_0001"), b.name)
+    assert abs(_psnr_a_to_b(a, b) - hand_psnr) <= 0.05  # depth in 0.2 mm codes
+    assert associate([1.0, 2.0], [0.99, 1.5, 2.05], 0.02) == [0, None]
+
+
+def test_bad_inputs_are_named(tmp_path, capsys):
+    t = json.loads((RGB / "transforms.json").read_text())
+    del t["frames"][1]["transform_matrix"]
+    (tmp_path / "t.json").write_text(json.dumps(t))
+    for f in RGB.glob("cam*_*.*"):
+        shutil.copy(f, tmp_path)
+    with pytest.raises(ValueError, match=r"transforms t.json: frames\[1\]: no 'transform_matrix'"):
+        read_frames("nerf", tmp_path / "t.json")
+    t = json.loads((RGB / "transforms.json").read_text())
+    t["frames"][0]["transfrom_matrix"] = t["frames"][0].pop("transform_matrix")
+    (tmp_path / "t.json").write_text(json.dumps(t))
+    with pytest.raises(ValueError, match=r"frames\[0\]: unknown key 'transfrom_matrix' \(did you mean 'transform_matrix'\?\)"):
+        read_frames("nerf", tmp_path / "t.json")
+    # depth and colour of different sizes: named, and nothing written by the command
+    t = json.loads((RGB / "transforms.json").read_text())
+    write_image(tmp_path / "small.exr", np.ones((10, 10), np.float32))
+    t["frames"][0]["depth_file_path"] = "small.exr"
+    (tmp_path / "t.json").write_text(json.dumps(t))
+    assert cli.main(["import", "nerf", str(tmp_path / "t.json"), "--out", str(tmp_path / "out")]) == 1
+    assert "depth small.exr is 10x10 but colour camB_0001_color.png is 64x48" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+    # channels that disagree
+    bad = np.stack([np.ones((48, 64)), 2 * np.ones((48, 64)), np.ones((48, 64))], -1).astype(np.float32)
+    write_image(tmp_path / "rgb.exr", bad)
+    with pytest.raises(ValueError, match=r"differ at 3072 pixel\(s\) \(R vs G\)"):
+        read_depth(tmp_path / "rgb.exr")
+    # timestamps that do not associate
+    _tum(tmp_path / "tum")
+    (tmp_path / "tum" / "groundtruth.txt").write_text("# nothing near\n1.0 0 0 0 0 0 0 1\n")
+    with pytest.raises(ValueError, match=r"no colour frame of .* has both a depth frame and a pose within 0.02 s"):
+        read_frames("tum", tmp_path / "tum")
+    assert cli.main(["import", "nerf-x", "a"]) == 2  # unknown format: usage error
+
+
+def test_cli_blender_script_path_and_import(tmp_path, capsys):
+    assert cli.main(["import", "blender", "--script"]) == 0
+    path = capsys.readouterr().out.strip()
+    assert Path(path) == blender_script_path() and Path(path).is_file()
+    assert "bpy" in Path(path).read_text()
+    assert cli.main(["import", "nerf", str(RGB / "transforms.json"), "--out", str(tmp_path / "v")]) == 0
+    assert sorted(p.name for p in (tmp_path / "v").iterdir()) == sorted(
+        [f"{n}{s}" for n in NAMES for s in (".json", "_color.png", "_depth.exr")] + ["nerf.json"])
+    assert cli.main(["import", "export-nerf", *map(str, sorted((tmp_path / "v").glob("cam*.json"))),
+                     "--out", str(tmp_path / "t.json")]) == 0
+    doc = json.loads((tmp_path / "t.json").read_text())
+    assert doc["frames"][0]["file_path"] == "v/camA_0001_color.png"
