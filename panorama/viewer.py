@@ -109,7 +109,8 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     """Write ``index.html``, ``viewer.json`` and the faces into ``folder``; return the page's path.
 
     ``pano`` is an equirect image (converted to faces of ``face_size``, default width / pi rounded
-    up to a multiple of 8, capped at 2048) or a cubemap in ``layout``. With ``stereo``
+    up to a power of two, capped at 2048: the page mipmaps the faces, which WebGL1 allows only for
+    power-of-two sizes) or a cubemap in ``layout``. With ``stereo``
     (``"top-bottom"`` or ``"sbs"``, :data:`STEREO_LAYOUTS`) ``pano`` is a packed ODS pair: the left
     eye goes to ``px.png .. nz.png``, the right eye to ``px_r.png .. nz_r.png``. ``folder`` must
     be new or empty unless ``force`` (:func:`check_site_folder`).
@@ -131,8 +132,8 @@ def _faces(pano, layout, face_size):
     """Six uint8 faces (px, nx, py, ny, pz, nz) of an equirect image or a cubemap."""
     if layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
                                 and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
-        if face_size is None:
-            face_size = min(2048, int(np.ceil(pano.shape[1] / np.pi / 8) * 8))
+        if face_size is None:  # a power of two (mipmaps on WebGL1 too), >= width / pi, <= 2048
+            face_size = int(min(2048, 2 ** int(np.ceil(np.log2(max(pano.shape[1] / np.pi, 8))))))
         faces = equirect_to_cubemap(pano, face_size, layout="list")
     else:
         from .convert import detect_layout
