@@ -16,7 +16,8 @@ def add_arguments(parser) -> None:
     from ._common import finite_float, frame_count, frame_rate, image_side, number_in, port_number
 
     parser.add_argument("pano", help="equirect image (2:1), cubemap image (horizon, vstrip, dice) or "
-                        "a folder of px/nx/py/ny/pz/nz face files")
+                        "a folder of px/nx/py/ny/pz/nz face files; with --serve/--site also a tour file "
+                        "(.json: scenes and hotspots, docs/viewer.md)")
     parser.add_argument("-o", "--output", default=None,
                         help="view image (.png/.jpg/.tif/.exr); with --tour a .gif/.mp4 (frames go "
                         "to <stem>_frames/) or a folder for frames only")
@@ -104,20 +105,36 @@ def _serve(args, pano, layout) -> int:
         server = None
         try:
             stereo = None if args.stereo == "none" else args.stereo
+            tour = pano if layout == "tour" else None
+
+            def write(to):
+                if tour is not None:
+                    from panorama.tour import write_tour_site
+
+                    write_tour_site(to, tour, face_size=args.face_size, force=True)
+                else:
+                    write_site(to, pano, layout=layout, face_size=args.face_size, stereo=stereo)
+
             if temporary:
-                write_site(folder, pano, layout=layout, face_size=args.face_size, stereo=stereo)
+                write(folder)
             else:
                 with OutputPlan("ibr view", log=info) as plan:
                     plan.add_input("PANO", args.pano)
-                    site = plan.add_folder("--site", folder, SITE_FILES)
+                    site = plan.add_folder("--site", folder, SITE_FILES + ("scene-*-*.png",))
                     plan.check()
-                    write_site(plan.stage(site), pano, layout=layout, face_size=args.face_size, stereo=stereo)
+                    write(plan.stage(site))
                     plan.commit()
-            from panorama.canvas import serve_canvas_site, store_path, write_canvas_site  # canvases (#14)
+            if not args.serve:
+                info(f"view: wrote the viewer site {folder} (any static web server can host it)")
+                return 0
+            if tour is not None:
+                server = serve(folder, port=args.port)
+            else:
+                from panorama.canvas import serve_canvas_site, store_path, write_canvas_site  # canvases (#14)
 
-            write_canvas_site(folder)
-            server = serve_canvas_site(folder, store_path(args.pano), port=args.port)
-            info(f"view: click-to-place canvases are stored in {store_path(args.pano)}")
+                write_canvas_site(folder)
+                server = serve_canvas_site(folder, store_path(args.pano), port=args.port)
+                info(f"view: click-to-place canvases are stored in {store_path(args.pano)}")
             mode = None if stereo is None else ("sbs" if args.stereo_out == "sbs" else "anaglyph")
             info(f"view: serving {folder} at "
                  f"{site_url(server, yaw_deg=args.yaw, pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov, mode=mode)}"
@@ -143,11 +160,16 @@ def run(args) -> int:
     from panorama.files import read_panorama
     from panorama.viewer import check_site_folder, to_uint8, tour_views  # noqa: F401
 
-    if args.serve:
+    if args.serve or args.site is not None:
         if args.site is not None:
             check_site_folder(args.site, force=args.force)  # before reading anything (#12)
         elif args.force:
             raise ValueError("--force: only with --site")
+        if Path(args.pano).suffix.lower() == ".json":  # a tour of several panoramas (panorama.tour)
+            from panorama.tour import load_tour
+
+            load_tour(args.pano)  # every scene, hotspot and link checked before the site is written
+            return _serve(args, Path(args.pano), "tour")
         if args.stereo != "none":
             from ibr.io import read_image
 
@@ -156,8 +178,8 @@ def run(args) -> int:
         else:
             pano, layout = read_panorama(args.pano, layout=args.layout)
         return _serve(args, pano, layout)
-    if args.site is not None or args.force:
-        raise ValueError("--site/--force: only with --serve")
+    if args.force:
+        raise ValueError("--force: only with --site")
     if args.output is None:
         raise ValueError("-o/--output: required unless --serve is given")
     out = Path(args.output)

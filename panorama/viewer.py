@@ -22,6 +22,7 @@ from __future__ import annotations
 import functools
 import http.server
 import json
+import re
 import shutil
 import threading
 from pathlib import Path
@@ -141,14 +142,19 @@ def _faces(pano, layout, face_size):
     return [to_uint8(np.ascontiguousarray(f)) for f in faces]
 
 
+#: A tour scene's face file (``panorama.tour``): scene-<id>-px.png ..
+_TOUR_FACE = re.compile(r"^scene-[A-Za-z0-9][A-Za-z0-9_-]{0,63}-(px|nx|py|ny|pz|nz)\.png$")
+
+
 class _SiteHandler(http.server.SimpleHTTPRequestHandler):
-    """Serves only the viewer's own files (:data:`SITE_FILES`); anything else is 404 (#12)."""
+    """Serves only the viewer's own files (:data:`SITE_FILES`, a tour's scene faces); anything
+    else is 404 (#12)."""
 
     quiet = True
 
     def send_head(self):
         name = self.path.split("?", 1)[0].split("#", 1)[0].lstrip("/") or "index.html"
-        if name not in SITE_FILES:
+        if name not in SITE_FILES and not _TOUR_FACE.match(name):
             self.send_error(404, "Not part of the viewer site")
             return None
         return super().send_head()

@@ -44,3 +44,89 @@ def test_mipmaps_filter_fine_texture_seen_at_a_wide_field_of_view(tmp_path):
         server.shutdown()
         server.server_close()
     assert _psnr(mip, ref) > 26 and _psnr(mip, ref) > _psnr(plain, ref) + 3  # measured 28.1 vs 24.0 dB
+
+
+@pytest.fixture()
+def tour_site(tmp_path):
+    import json
+
+    from ibr.io import write_image
+    from panorama.tour import write_tour_site
+
+    d = equirect_directions(256, 128)
+    for name, k in (("hall", 3), ("kitchen", 7)):
+        img = np.stack([0.5 + 0.4 * np.sin(k * d[..., 0]), 0.5 + 0.4 * d[..., 1], 0.5 + 0.4 * np.cos(k * d[..., 2])], -1)
+        write_image(tmp_path / f"{name}.png", np.rint(img * 255).astype(np.uint8))
+    tour = {"first": "hall", "scenes": {
+        "hall": {"panorama": "hall.png", "title": "Hall",
+                 "hotspots": [{"yaw": 10, "pitch": 0, "scene": "kitchen"}, {"yaw": -30, "pitch": 10, "label": "A label"}]},
+        "kitchen": {"panorama": "kitchen.png", "yaw": 90, "hotspots": [{"yaw": 180, "pitch": 0, "scene": "hall"}]}}}
+    (tmp_path / "tour.json").write_text(json.dumps(tour))
+    site = tmp_path / "site"
+    write_tour_site(site, tmp_path / "tour.json", face_size=64)
+    return site
+
+
+def _faces(site, prefix):
+    return [read_image(site / f"{prefix}{n}.png") for n in ("px", "nx", "py", "ny", "pz", "nz")]
+
+
+@pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
+def test_tour_hotspot_click_changes_the_scene_and_keys_turn_the_view(tmp_path, tour_site):
+    """A click on the hall's link (yaw 10, pitch 0: at 0.5 + tan 10 / (2 tan 45) = 0.588 of the
+    window's width, half its height, in a view at yaw 0, fov 90) opens the kitchen at its own
+    initial yaw (90); a click beside it does nothing; two presses of the right arrow turn the view
+    by 2 x 5 degrees (at fov 90)."""
+    hall, kitchen = _faces(tour_site, "scene-hall-"), _faces(tour_site, "scene-kitchen-")
+    server = serve(tour_site)
+    try:
+        base = site_url(server, hud=False, yaw_deg=0.0, pitch_deg=0.0, fov_deg=90.0)
+        clicked = _screenshot(base + "&click=0.588,0.5", tmp_path / "click.png")
+        missed = _screenshot(base + "&click=0.3,0.8", tmp_path / "miss.png")  # no spot there
+        turned = _screenshot(site_url(server, hud=False, yaw_deg=170.0, pitch_deg=0.0, fov_deg=90.0)
+                             + "&keys=ArrowRight,ArrowRight", tmp_path / "keys.png")
+    finally:
+        server.shutdown()
+        server.server_close()
+    view = dict(pitch_deg=0.0, roll_deg=0.0, fov_deg=90.0, width=W, height=H)
+    assert _psnr(clicked, P.perspective(kitchen, yaw_deg=90.0, **view)) > 40
+    hall0 = P.perspective(hall, yaw_deg=0.0, **view).astype(np.int16)
+    assert np.median(np.abs(missed - hall0)) <= 1  # still the hall (its two spots drawn over it)
+    assert _psnr(missed, P.perspective(kitchen, yaw_deg=90.0, **view)) < 20
+    assert _psnr(turned, P.perspective(hall, yaw_deg=180.0, **view)) > 40
+    assert _psnr(turned, P.perspective(hall, yaw_deg=170.0, **view)) < 30
+
+
+def test_tour_files_are_checked(tmp_path, tour_site):
+    import json
+
+    from panorama.tour import load_tour
+
+    good = json.loads((tmp_path / "tour.json").read_text())
+    cases = [
+        (("scenes", "hall", "hotspots", 0, "scene"), "kitchn", r"hotspot 0 links to scene 'kitchn', which the tour does not have \(did you mean 'kitchen'\?\)"),
+        (("scenes", "hall", "hotspots", 1, "pitch"), 120, r"hotspot 1: 'pitch': 120 is an impossible angle \(expected -90..90 degrees\)"),
+        (("first",), "kitchen2", r"'first' is 'kitchen2', which the tour does not have"),
+        (("scenes", "kitchen", "panorama"), "nope.png", r"scene 'kitchen': 'panorama' refers to a missing file"),
+        (("scenes", "hall", "hotspot"), [], r"unknown key 'hotspot' \(did you mean 'hotspots'\?\)"),
+    ]
+    for path, value, message in cases:
+        doc = json.loads(json.dumps(good))
+        node = doc
+        for k in path[:-1]:
+            node = node[k]
+        if path[-1] == "hotspot":
+            node["hotspot"] = node.pop("hotspots")
+        else:
+            node[path[-1]] = value
+        (tmp_path / "bad.json").write_text(json.dumps(doc))
+        with pytest.raises((ValueError, FileNotFoundError), match=message):
+            load_tour(tmp_path / "bad.json")
+    import cli
+
+    (tmp_path / "bad.json").write_text(json.dumps({"scenes": {"hall": {"panorama": "hall.png", "hotspots": [
+        {"yaw": 0, "pitch": 0, "scene": "attic"}]}}}))
+    assert cli.main(["view", str(tmp_path / "bad.json"), "--site", str(tmp_path / "s2")]) == 1
+    assert not (tmp_path / "s2").exists()
+    assert cli.main(["view", str(tmp_path / "tour.json"), "--site", str(tmp_path / "s3")]) == 0
+    assert (tmp_path / "s3" / "scene-kitchen-nz.png").is_file() and (tmp_path / "s3" / "viewer.json").is_file()
