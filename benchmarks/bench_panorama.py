@@ -17,6 +17,7 @@ first (cold) call is reported too. Writes benchmarks/results/panorama.png.
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import os
 import statistics
@@ -208,6 +209,7 @@ def main(argv=None):
         return lambda: cv2.remap(src, smap.map_x, smap.map_y, cv2.INTER_LINEAR,
                                  borderMode=cv2.BORDER_WRAP if not smap.pad else cv2.BORDER_REPLICATE)
 
+    new_yaw = itertools.count(start=yaw + 0.37, step=1.37)  # never a cached view
     cases = {
         f"e2c {W}x{H} -> {S}^2 (list)": (
             lambda: P.equirect_to_cubemap(img8, S, layout="list"),
@@ -220,6 +222,10 @@ def main(argv=None):
         f"e2p {W}x{H} -> {PW}x{PH}": (
             lambda: P.perspective(img8, yaw_deg=yaw, pitch_deg=pitch, fov_deg=fov, width=PW, height=PH),
             lambda: py360.e2p(img8, fov_deg=(fov, vfov), u_deg=yaw, v_deg=pitch, out_hw=(PH, PW)),
+            bare(M.perspective_map(yaw, pitch, 0.0, fov, PW, PH, "equirect", H, W), img8)),
+        f"e2p {W}x{H} -> {PW}x{PH}, new yaw": (  # a tour / a viewer: new maps every call
+            lambda: P.perspective(img8, yaw_deg=next(new_yaw), pitch_deg=pitch, fov_deg=fov, width=PW, height=PH),
+            lambda: py360.e2p(img8, fov_deg=(fov, vfov), u_deg=next(new_yaw), v_deg=pitch, out_hw=(PH, PW)),
             bare(M.perspective_map(yaw, pitch, 0.0, fov, PW, PH, "equirect", H, W), img8)),
         f"c2e {S}^2 -> {W}x{H}": (
             lambda: P.cubemap_to_equirect(faces8, W, H, layout="list"),

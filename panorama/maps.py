@@ -111,6 +111,27 @@ def perspective_rays(yaw_deg, pitch_deg, roll_deg, fov_deg, width, height) -> np
 @lru_cache(maxsize=_CACHE)
 def perspective_map(yaw_deg: float, pitch_deg: float, roll_deg: float, fov_deg: float,
                     width: int, height: int, source: str, src_h: int, src_w: int) -> SampleMap:
-    """Map from a perspective view to an equirect (src_h x src_w) or cube (src_h = S) source."""
-    d = perspective_rays(yaw_deg, pitch_deg, roll_deg, fov_deg, width, height)
-    return map_from_directions(d, source, (src_h, src_w))
+    """Map from a perspective view to an equirect (src_h x src_w) or cube (src_h = S) source.
+
+    Built per pixel by a numba kernel (:mod:`panorama._map_kernels`: same formulas as
+    :func:`map_from_directions` of :func:`perspective_rays`, without the (H, W, 3) arrays), so a
+    new view direction every frame (a tour, a viewer) costs one pass.
+    """
+    from . import _map_kernels
+    from .directions import _AXIS_OF, _SIGN_OF
+
+    if source not in ("equirect", "cube"):
+        raise ValueError(f"source: expected 'equirect' or 'cube', got {source!r}")
+    cam = Camera.from_fov(width, height, hfov_deg=fov_deg)
+    rot = np.ascontiguousarray(world_from_view(yaw_deg, pitch_deg, roll_deg))
+    mx = np.empty((height, width), np.float32)
+    my = np.empty((height, width), np.float32)
+    _map_kernels.perspective_map(rot, cam.fx, cam.fy, cam.cx, cam.cy, source == "cube", src_h, src_w,
+                                 np.ascontiguousarray(_AXIS_OF, np.int64), np.ascontiguousarray(_SIGN_OF, np.float64),
+                                 _map_kernels.ATAN_POLY, mx, my)
+    pad = 1 if source == "cube" else int(bool(my.min() < 0 or my.max() > src_h - 1))
+    if source == "equirect" and pad:  # the padded equirect (pole rows): +1 texel both ways
+        mx += 1.0
+        my += 1.0
+    _freeze(mx, my)
+    return SampleMap(mx, my, source, pad, (src_h, src_w))

@@ -346,7 +346,7 @@ _add("view --site non-empty without --force", O, "error", r"site: .* is not empt
      argv=("view", "{d}/pano.png", "--serve", "--site", "{d}/sub2", "--port", "0"), extra={"site_nonempty": "sub2"}, issue=True)
 _add("view --site is a file", O, "error", r"site: .* exists and is not a folder",
      argv=("view", "{d}/pano.png", "--serve", "--site", "{d}/notes.txt", "--port", "0"))
-_add("view --force without --serve", O, "error", r"--site/--force: only with --serve",
+_add("view --force without --serve", O, "error", r"--force: only with --site",
      argv=("view", "{d}/pano.png", "--force", "-o", "{d}/v.png"))
 _add("samples --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("samples", "--out", "{d}/notes.txt"))
 _add("bench --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("bench", "synth", "--out", "{d}/notes.txt"))
