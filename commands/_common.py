@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 import time
+from pathlib import Path
 from typing import Iterable, Iterator, TypeVar
 
 T = TypeVar("T")
@@ -119,3 +120,22 @@ class terminate_as_interrupt:
         if self._old is not None:
             signal.signal(signal.SIGTERM, self._old)
         return False
+
+
+def note_first_run(*modules: str) -> None:
+    """Say before a long first run that numba is compiling (once): when none of ``modules``
+    (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet."""
+    import importlib.util
+    import os
+
+    if os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("NUMBA_DISABLE_JIT"):
+        return  # cache elsewhere, or no compilation: nothing to say
+    for name in modules:
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.origin is None:
+            return
+        path = Path(spec.origin)
+        cache = path.parent / "__pycache__"
+        if cache.is_dir() and any(p.name.startswith(path.stem + ".") and p.suffix == ".nbi" for p in cache.iterdir()):
+            return
+    info("first run: compiling the numba kernels (15-25 s, once; later runs load them from the cache)")

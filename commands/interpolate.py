@@ -164,7 +164,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import info, progress
+    from commands._common import info, note_first_run, progress
     from ibr.io import load_view, write_image
     from ibr.io.outputs import OutputPlan, VIDEO_EXTS
     from ibr.render.view_synthesis import iter_interpolate, source_mesh
@@ -204,6 +204,7 @@ def run(args) -> int:
         video = plan.add_file("--video", args.video, VIDEO_EXTS)
         sheet = plan.add_file("--contact-sheet", args.contact_sheet, (".png", ".jpg", ".jpeg", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
+        note_first_run("ibr.mesh._segment_kernels", "ibr.render._composite_kernels")
         view_a, view_b = load_view(path_a), load_view(path_b)
 
         if args.method == "mesh":
