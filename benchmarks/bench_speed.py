@@ -1,0 +1,179 @@
+"""Speed where users wait (issue #13): one table, every row a ratio to its peer or floor timed in
+the same run (the machine is shared and noisy), plus the peak memory of a 1080p interpolation.
+
+    flock /tmp/ibr-bench.lock python benchmarks/bench_speed.py            # full (with the cold start)
+    python benchmarks/bench_speed.py --quick                              # smaller, no cold start
+    ibr bench speed
+
+Rows: first ``ibr interpolate`` from a fresh clone (numba compiling) vs the same command warm;
+``panorama.perspective`` at a new yaw every call vs py360convert's ``e2p`` and one ``cv2.remap``;
+a 36-frame tour vs 36 remaps; stereo method 2 per eye vs one remap; the motorcycle one-source
+warp vs ``cv2.warpFrame``; the two-source frame at 512^2 and 1920x1080 vs one remap per source;
+``e2c`` vs py360convert; peak RSS of a 1920x1080 two-source interpolation (own process).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(ROOT))
+
+from _timing import median_seconds, paired_ms  # noqa: E402
+
+RESULTS = HERE / "results"
+
+
+def _remap_floor(h: int, w: int, src: np.ndarray):
+    mx, my = np.meshgrid(np.arange(w, dtype=np.float32) * (src.shape[1] / w),
+                         np.arange(h, dtype=np.float32) * (src.shape[0] / h))
+    return lambda: cv2.remap(src, mx, my, cv2.INTER_LINEAR)
+
+
+def cold_start(rows) -> None:
+    """First and second ``ibr interpolate`` on the bundled pair in a fresh clone and cache."""
+    with tempfile.TemporaryDirectory(prefix="ibr-cold-") as tmp:
+        clone = Path(tmp) / "clone"
+        subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba"), "PYTHONPATH": str(clone)}
+        cmd = [sys.executable, "-c", "import sys, cli; sys.exit(cli.main(['interpolate', '--out', 'out']))"]
+        times = []
+        for _ in range(2):
+            t0 = time.perf_counter()
+            subprocess.run(cmd, cwd=clone, env=env, check=True, capture_output=True)
+            times.append(time.perf_counter() - t0)
+    rows.append(("first `ibr interpolate`, fresh clone", f"{times[0]:.1f} s",
+                 f"warm {times[1]:.1f} s ({times[0] / times[1]:.1f}x); target <= 6 s, warm <= 1.5 s"))
+
+
+def perspective_rows(rows, quick: bool, repeats: int) -> None:
+    import panorama as P
+
+    w, h = (2048, 1024) if quick else (4096, 2048)
+    pw, ph = (960, 540) if quick else (1920, 1080)
+    img = (np.random.default_rng(0).random((h, w, 3)) * 255).astype(np.uint8)
+    yaw = itertools.count(0.37, 1.37)  # a new view every call: nothing cached
+    ours = lambda: P.perspective(img, yaw_deg=next(yaw), pitch_deg=5.0, fov_deg=90.0, width=pw, height=ph)  # noqa: E731
+    floor = _remap_floor(ph, pw, img)
+    ms, ratio = paired_ms(ours, floor, repeats)
+    note = f"{ratio:.1f}x one cv2.remap"
+    try:
+        import py360convert as py360
+
+        theirs = lambda: py360.e2p(img, fov_deg=(90.0, 58.7), u_deg=next(yaw), v_deg=5.0, out_hw=(ph, pw))  # noqa: E731
+        ms_py, r_py = paired_ms(theirs, ours, max(3, repeats // 3))
+        note += f"; py360convert e2p {ms_py:.0f} ms = {r_py:.1f}x ours (target >= 15x)"
+    except ImportError:
+        note += "; py360convert not installed"
+    rows.append((f"perspective {pw}x{ph} at a new yaw, {w}-wide equirect", f"{ms:.1f} ms", note + "; target <= 20 ms"))
+    from panorama.viewer import tour_views
+
+    tw, th = (640, 360) if quick else (1280, 720)
+    tour = lambda: list(tour_views(img, 36, width=tw, height=th))  # noqa: E731
+    t_tour = median_seconds(tour, max(1, repeats // 5))
+    f = _remap_floor(th, tw, img)
+    t_floor = median_seconds(lambda: [f() for _ in range(36)], max(1, repeats // 5))
+    rows.append((f"tour of 36 views {tw}x{th} (no encoding)", f"{t_tour:.2f} s",
+                 f"{t_tour / t_floor:.1f}x 36 remaps; target <= 3 s"))
+    s = w // 4
+    ours_e2c = lambda: P.equirect_to_cubemap(img, s, layout="list")  # noqa: E731
+    try:
+        import py360convert as py360
+
+        ms_e2c, r = paired_ms(lambda: py360.e2c(img, face_w=s, cube_format="list"), ours_e2c, repeats)
+        rows.append((f"e2c {w}x{h} -> {s}^2 faces", f"{ms_e2c / r:.1f} ms", f"py360convert {ms_e2c:.1f} ms = {r:.2f}x ours (target >= 2x)"))
+    except ImportError:
+        pass
+
+
+def render_rows(rows, quick: bool, repeats: int) -> None:
+    from bench_render import room_pair, warpframe_layer
+
+    from ibr import warp
+    from ibr.base.camera import interpolate_cameras
+    from ibr.io.middlebury import motorcycle_views
+    from ibr.render.view_synthesis import interpolate, source_mesh
+    from ibr.stereo.pair import stereo_pair
+
+    left, right = motorcycle_views()
+    source_mesh(left)
+    ms, ratio = paired_ms(lambda: warp(left, right.camera, fill="none"), lambda: warpframe_layer(left, right.camera),
+                          repeats)
+    rows.append(("motorcycle 741x500 one-source warp, cached mesh", f"{ms:.1f} ms",
+                 f"{ratio:.2f}x cv2.warpFrame (target <= 0.7x)"))
+    sizes = [(512, 512)] + ([] if quick else [(1920, 1080)])
+    for w, h in sizes:
+        a, b = room_pair(w, h)
+        cam = interpolate_cameras(a.camera, b.camera, 0.5)
+        source_mesh(a), source_mesh(b)
+        floor = _remap_floor(h, w, a.color)
+        ms, ratio = paired_ms(lambda: interpolate(a, b, cam, fill="none"), lambda: (floor(), floor()), repeats)
+        target = "4 ms" if w == 512 else "30 ms"
+        rows.append((f"two-source frame {w}x{h}, cached meshes", f"{ms:.1f} ms",
+                     f"{ratio:.1f}x two cv2.remap; target <= {target}"))
+    a, _ = room_pair(*((512, 512) if quick else (1920, 1080)))
+    floor = _remap_floor(a.camera.height, a.camera.width, a.color)
+    ms, ratio = paired_ms(lambda: stereo_pair(a, e=0.065, f=2.0, method="pixel"), lambda: (floor(), floor()), repeats)
+    rows.append((f"stereo method 2 (pixel), {a.camera.width}x{a.camera.height}, both eyes", f"{ms / 2:.1f} ms per eye",
+                 f"{ratio:.1f}x two cv2.remap; target <= 15 ms per eye"))
+
+
+def peak_rss(rows) -> None:
+    """Peak RSS of one 1920x1080 two-source interpolation in its own process (meshes included),
+    beside the same process stopping before the interpolation (imports and the two views)."""
+    from bench_render import room_pair
+
+    room_pair(1920, 1080)  # ray-traced once and cached, so the child only loads it
+    code = ("import resource, sys; sys.path[:0] = [%r, %r]\n"
+            "from bench_render import room_pair\nfrom ibr.base.camera import interpolate_cameras\n"
+            "from ibr.render.view_synthesis import interpolate\n"
+            "a, b = room_pair(1920, 1080)\n"
+            "interpolate(a, b, interpolate_cameras(a.camera, b.camera, 0.5))\n"
+            "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)" % (str(HERE), str(ROOT)))
+    def rss(src: str) -> float:
+        out = subprocess.run([sys.executable, "-c", src], check=True, capture_output=True, text=True).stdout
+        return int(out.split()[-1]) / 1024
+
+    mb = rss(code)
+    base = rss(code.replace("interpolate(a, b, interpolate_cameras(a.camera, b.camera, 0.5))\n", ""))
+    rows.append(("peak RSS, 1920x1080 two-source interpolation", f"{mb:.0f} MB",
+                 f"own process; {base:.0f} MB before interpolating (imports, two views); target <= 400 MB"))
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="smaller sizes, no cold start, few repeats")
+    p.add_argument("--repeats", type=int, default=None)
+    args = p.parse_args(argv)
+    repeats = args.repeats or (3 if args.quick else 9)
+    rows: list[tuple[str, str, str]] = []
+    if not args.quick:
+        cold_start(rows)
+    perspective_rows(rows, args.quick, repeats)
+    render_rows(rows, args.quick, repeats)
+    if not args.quick:
+        peak_rss(rows)
+    load = os.getloadavg()[0]
+    width = max(len(r[0]) for r in rows)
+    print(f"{'measure':<{width}}  {'value':>16}  ratio to the peer/floor timed in the same run (load {load:.2f})")
+    for name, value, note in rows:
+        print(f"{name:<{width}}  {value:>16}  {note}")
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / "speed.txt").write_text("\n".join(" | ".join(r) for r in rows) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
