@@ -28,53 +28,46 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
     segment covers the target pixel centers j with x_i <= j <= x_{i+1}; inverse depth and color
     are interpolated linearly in x (exact for inverse depth on planes). A pixel's outer half
     footprint [x - 0.5, x] / [x, x + 0.5] on an unconnected side takes its own color and depth.
-    Z-buffer: nearest wins.
+    Z-buffer: nearest wins (kept per row in inverse depth, so no division per candidate pixel;
+    each source pixel's position and inverse depth are computed once per row).
     """
     h, w, nc = color.shape
     for v in prange(h):
+        xs = np.empty(w)
+        izs = np.empty(w)
+        ok = np.zeros(w, np.bool_)
+        best = np.zeros(w)  # the row's z-buffer in inverse depth (0 = empty)
         for i in range(w):
             zi = z[v, i]
-            if not (zi > 0):
+            if zi > 0:
+                ok[i] = True
+                xs[i] = i - fx * dx / zi + dpixel
+                izs[i] = 1.0 / zi
+        for i in range(w):
+            if not ok[i]:
                 continue
-            xi = i - fx * dx / zi + dpixel
-            izi = 1.0 / zi
-            # right neighbour
-            conn_r = False
-            if i + 1 < w:
-                zr = z[v, i + 1]
-                if zr > 0:
-                    xr = i + 1 - fx * dx / zr + dpixel
-                    if abs((xr - (i + 1)) - (xi - i)) <= max_jump_px:
-                        conn_r = True
-                        izr = 1.0 / zr
-                        a, b = xi, xr
-                        if a > b:
-                            a, b = b, a
-                        j0 = max(int(np.ceil(a)), 0)
-                        j1 = min(int(np.floor(b)), w - 1)
-                        span = xr - xi
-                        for j in range(j0, j1 + 1):
-                            t = 0.0 if span == 0 else (j - xi) / span
-                            iz = izi + t * (izr - izi)
-                            zz = 1.0 / iz
-                            if zz < out_depth[v, j]:
-                                out_depth[v, j] = zz
-                                out_cov[v, j] = True
-                                for c in range(nc):
-                                    out_color[v, j, c] = color[v, i, c] + t * (color[v, i + 1, c] - color[v, i, c])
-            # left neighbour connected?
-            conn_l = False
-            if i > 0:
-                zl = z[v, i - 1]
-                if zl > 0:
-                    xl = i - 1 - fx * dx / zl + dpixel
-                    if abs((xi - i) - (xl - (i - 1))) <= max_jump_px:
-                        conn_l = True
+            xi = xs[i]
+            izi = izs[i]
+            conn_r = i + 1 < w and ok[i + 1] and abs((xs[i + 1] - (i + 1)) - (xi - i)) <= max_jump_px
+            conn_l = i > 0 and ok[i - 1] and abs((xi - i) - (xs[i - 1] - (i - 1))) <= max_jump_px
+            if conn_r:
+                xr = xs[i + 1]
+                izr = izs[i + 1]
+                a, b = (xi, xr) if xi <= xr else (xr, xi)
+                j0 = max(int(np.ceil(a)), 0)
+                j1 = min(int(np.floor(b)), w - 1)
+                span = xr - xi
+                inv_span = 0.0 if span == 0 else 1.0 / span
+                for j in range(j0, j1 + 1):
+                    t = (j - xi) * inv_span
+                    iz = izi + t * (izr - izi)
+                    if iz > best[j]:
+                        best[j] = iz
+                        for c in range(nc):
+                            out_color[v, j, c] = color[v, i, c] + t * (color[v, i + 1, c] - color[v, i, c])
             # half footprints on unconnected sides: [x - 0.5, x] and [x, x + 0.5)
             for side in range(2):
-                if side == 0 and conn_l:
-                    continue
-                if side == 1 and conn_r:
+                if (side == 0 and conn_l) or (side == 1 and conn_r):
                     continue
                 if side == 0:
                     j0 = max(int(np.ceil(xi - 0.5)), 0)
@@ -83,11 +76,14 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
                     j0 = max(int(np.ceil(xi)), 0)
                     j1 = min(int(np.ceil(xi + 0.5)) - 1, w - 1)
                 for j in range(j0, j1 + 1):
-                    if zi < out_depth[v, j]:
-                        out_depth[v, j] = zi
-                        out_cov[v, j] = True
+                    if izi > best[j]:
+                        best[j] = izi
                         for c in range(nc):
                             out_color[v, j, c] = color[v, i, c]
+        for j in range(w):
+            if best[j] > 0:
+                out_depth[v, j] = 1.0 / best[j]
+                out_cov[v, j] = True
 
 
 @njit(cache=True)
