@@ -43,13 +43,10 @@ def _angle(where: str, value, lo: float, hi: float) -> float:
 
 def load_tour(path) -> dict:
     """The checked tour: ``{"first": id, "scenes": {id: {..., "panorama": Path}}}``."""
+    from ibr.io.view_files import read_json
+
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"tour: {path} is not a file")
-    try:
-        doc = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"tour {path.name}: not JSON: {exc}") from None
+    doc = read_json(path, "tour")
     where = f"tour {path.name}"
     if not isinstance(doc, dict):
         raise ValueError(f"{where}: expected an object with 'scenes'")

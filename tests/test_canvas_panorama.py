@@ -188,12 +188,7 @@ def test_server_accepts_saves_and_serves_only_named_images(tmp_path):
 
 
 # ----------------------------------------------------------------------------- headless Chromium
-def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    return None
+from browser import chromium as _chromium  # noqa: E402
 
 
 class _DevTools:

@@ -15,6 +15,8 @@ from cli import main
 from ibr.io import read_image, write_image
 from panorama.directions import equirect_directions
 
+from browser import chromium as _chromium
+
 
 def smooth_eq(w=128, h=64):
     d = equirect_directions(w, h)
@@ -102,14 +104,6 @@ def test_cli_errors(tmp_path, capsys):
 
 
 # ------------------------------------------------------------------ web viewer
-def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    return None
-
-
 @pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
 def test_web_viewer_matches_library_render(tmp_path):
     """Serve the page, screenshot it in headless Chromium at a known view and compare it with

@@ -4,9 +4,6 @@ side by side, screenshot in headless Chromium and compared with panorama.perspec
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
-import tempfile
 
 import numpy as np
 import pytest
@@ -17,6 +14,8 @@ from ibr.io import read_image, write_image
 from ibr.stereo.pair import pack_stereo
 from panorama.directions import equirect_directions
 from panorama.viewer import SITE_FILES, serve, site_url, split_stereo, write_site
+
+from browser import chromium as _chromium, screenshot
 
 W, H = 320, 240  # headless Chromium does not shrink its viewport much below ~300 px
 VIEW = dict(yaw_deg=40.0, pitch_deg=20.0, roll_deg=5.0, fov_deg=80.0)
@@ -36,28 +35,8 @@ def ods_pair():
     return _eye(0.0), _eye(0.25)
 
 
-def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    return None
-
-
 def _screenshot(url, out):
-    profile = tempfile.mkdtemp(prefix="ibr-chromium-")
-    try:
-        cmd = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-               "--disable-background-networking", "--disable-component-update", "--disable-sync",
-               f"--user-data-dir={profile}", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-               "--force-device-scale-factor=1", "--hide-scrollbars", f"--screenshot={out}",
-               f"--window-size={W},{H}", "--virtual-time-budget=5000", url]
-        subprocess.run(cmd, capture_output=True, timeout=120, check=False)
-    finally:
-        shutil.rmtree(profile, ignore_errors=True)
-    if not out.exists():
-        pytest.skip("Chromium ran but wrote no screenshot (no WebGL in this environment)")
-    return read_image(out)[..., :3].astype(np.int16)
+    return screenshot(url, out, W, H)
 
 
 def _close(got, ref):

@@ -61,6 +61,17 @@ VIEW_KEYS = ("format", "version", "name", "color", "depth", "camera")
 
 
 # --------------------------------------------------------------------------- view files
+def read_json(path, what: str):
+    """The JSON document of a file; ``FileNotFoundError`` / ``ValueError`` name ``what`` and the
+    path (shared by view, tour and other tools' files)."""
+    path = Path(path)
+    _require_file(path, what)
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{what} {path}: not valid JSON ({exc})") from None
+
+
 def _param(params: dict, key: str, where: str, *, allow_inf: bool = False) -> float:
     value = params[key]
     if allow_inf and (value == math.inf or (isinstance(value, str) and value.lower() in ("inf", "infinity"))):
@@ -188,11 +199,7 @@ def load_view(path) -> View:
         camera values (fx <= 0, a pose whose rotation block is not a rotation, ...).
     """
     path = Path(path)
-    _require_file(path, "view file")
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"view file {path}: not valid JSON ({exc})") from None
+    doc = read_json(path, "view file")
     where = f"view file {path}"
     if not isinstance(doc, dict):
         raise ValueError(f"{where}: expected a JSON object, got {type(doc).__name__}")

@@ -36,17 +36,22 @@ _FAST = {"reassoc", "nsz", "arcp", "contract", "afn"}
 
 
 @njit(cache=True, error_model="numpy", inline="always", fastmath=_FAST)
-def _bilinear2(src, x, y):
-    """Bilinear sample of a 2-D array (pixel centres at integers; taps clamped to the image)."""
-    h, w = src.shape
+def _taps(h, w, x, y):
+    """Bilinear taps (x0, x1, y0, y1) clamped to an h x w image and the fractions (ax, ay);
+    pixel centres at integers."""
     fx0 = math.floor(x)
     fy0 = math.floor(y)
-    ax = x - fx0
-    ay = y - fy0
     x0 = min(max(int(fx0), 0), w - 1)
     x1 = min(max(int(fx0) + 1, 0), w - 1)
     y0 = min(max(int(fy0), 0), h - 1)
     y1 = min(max(int(fy0) + 1, 0), h - 1)
+    return x0, x1, y0, y1, x - fx0, y - fy0
+
+
+@njit(cache=True, error_model="numpy", inline="always", fastmath=_FAST)
+def _bilinear2(src, x, y):
+    """Bilinear sample of a 2-D array (pixel centres at integers; taps clamped to the image)."""
+    x0, x1, y0, y1, ax, ay = _taps(src.shape[0], src.shape[1], x, y)
     top = src[y0, x0] * (1.0 - ax) + src[y0, x1] * ax
     bot = src[y1, x0] * (1.0 - ax) + src[y1, x1] * ax
     return top * (1.0 - ay) + bot * ay
@@ -104,15 +109,7 @@ def _add_sample(v, u, z, wgt, src_id, src, us, vs, rel_tol, cubic, acc, acc_w, a
         for ch in range(acc.shape[2]):
             acc[v, u, ch] += wgt * _bicubic(src, us, vs, ch)
     else:  # bilinear: the four taps and their weights once for every channel
-        h, w = src.shape[0], src.shape[1]
-        fx0 = math.floor(us)
-        fy0 = math.floor(vs)
-        ax = us - fx0
-        ay = vs - fy0
-        x0 = min(max(int(fx0), 0), w - 1)
-        x1 = min(max(int(fx0) + 1, 0), w - 1)
-        y0 = min(max(int(fy0), 0), h - 1)
-        y1 = min(max(int(fy0) + 1, 0), h - 1)
+        x0, x1, y0, y1, ax, ay = _taps(src.shape[0], src.shape[1], us, vs)
         w00 = wgt * (1.0 - ax) * (1.0 - ay)
         w01 = wgt * ax * (1.0 - ay)
         w10 = wgt * (1.0 - ax) * ay

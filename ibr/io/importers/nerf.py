@@ -24,7 +24,7 @@ import numpy as np
 
 from ...base.camera import Camera
 from ..images import read_image
-from ..view_files import load_view
+from ..view_files import load_view, read_json
 from .common import SEQUENCE_FORMAT, Frame, ImportReport, check_foreign_keys
 from .conventions import gl_from_ours, ours_from_gl
 
@@ -91,12 +91,7 @@ def _resolve(base: Path, name, where: str, key: str) -> Path:
 def read_transforms(path, report: ImportReport | None = None) -> list[Frame]:
     """Frames of a ``transforms.json`` (see the module docstring), in file order."""
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"transforms: {path} is not a file")
-    try:
-        top = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"transforms: {path} is not JSON: {exc}") from None
+    top = read_json(path, "transforms")
     if not isinstance(top, dict) or not isinstance(top.get("frames"), list) or not top["frames"]:
         raise ValueError(f"transforms: {path} has no 'frames' list")
     check_foreign_keys(f"transforms {path.name}", top, _TOP_KEYS, report)
