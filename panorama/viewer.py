@@ -42,6 +42,9 @@ WEB_DIR = Path(__file__).with_name("web")
 _FACES = FACE_FILE_NAMES  # px, nx, py, ny, pz, nz
 SITE_FILES = (("index.html", "viewer.json") + tuple(f"{n}.png" for n in _FACES)
               + tuple(f"{n}_r.png" for n in _FACES))
+#: Largest cube face the site writes: 4096 px is the safe WebGL cube-map size on phones (the page
+#: also checks its own device's MAX_CUBE_MAP_TEXTURE_SIZE and says so instead of a black page).
+MAX_FACE_SIZE = 4096
 #: How a stereo panorama packs its eyes (what ``ibr stitch --stereo ods --layout`` writes).
 STEREO_LAYOUTS = ("top-bottom", "sbs")
 #: What the page shows of a stereo panorama (``?mode=``); mono panoramas show "mono" only.
@@ -117,6 +120,9 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     be new or empty unless ``force`` (:func:`check_site_folder`).
     """
     eyes = split_stereo(pano, stereo) if stereo is not None else (pano,)
+    if face_size is not None and face_size > MAX_FACE_SIZE:
+        raise ValueError(f"face_size: {face_size} px faces exceed what phones and many GPUs show "
+                         f"({MAX_FACE_SIZE} px per cube face); choose --face-size <= {MAX_FACE_SIZE}")
     folder = check_site_folder(folder, force=force)
     faces_per_eye = [_faces(eye, layout, face_size) for eye in eyes]  # all converted before writing
     folder.mkdir(parents=True, exist_ok=True)

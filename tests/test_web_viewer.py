@@ -130,3 +130,15 @@ def test_tour_files_are_checked(tmp_path, tour_site):
     assert not (tmp_path / "s2").exists()
     assert cli.main(["view", str(tmp_path / "tour.json"), "--site", str(tmp_path / "s3")]) == 0
     assert (tmp_path / "s3" / "scene-kitchen-nz.png").is_file() and (tmp_path / "s3" / "viewer.json").is_file()
+
+
+def test_faces_over_the_device_limit_are_refused_or_explained(tmp_path):
+    """write_site refuses faces larger than phones show; the page checks its own device's limit
+    and prints a message in place of a black page."""
+    from panorama.viewer import MAX_FACE_SIZE, WEB_DIR
+
+    with pytest.raises(ValueError, match=r"face_size: 8192 px faces exceed .* choose --face-size <= 4096"):
+        write_site(tmp_path / "s", np.zeros((64, 128, 3), np.float32), face_size=2 * MAX_FACE_SIZE)
+    assert not (tmp_path / "s").exists()
+    page = (WEB_DIR / "index.html").read_text()
+    assert "MAX_CUBE_MAP_TEXTURE_SIZE" in page and "write the site with a smaller --face-size" in page
