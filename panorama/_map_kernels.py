@@ -28,8 +28,9 @@ ATAN_POLY = _atan_coefficients(7)
 
 
 @njit(cache=True, error_model="numpy", inline="always", fastmath={"arcp", "contract", "nsz"})
-def _atan2(y, x, poly):
-    """atan2 through :data:`ATAN_POLY` (same quadrants as math.atan2 except the sign of -0)."""
+def _atan2(y, x, c0, c1, c2, c3, c4, c5, c6, c7):
+    """atan2 through :data:`ATAN_POLY` (same quadrants as math.atan2 except the sign of -0);
+    the polynomial in Estrin's form (short dependency chains)."""
     ay, ax = abs(y), abs(x)
     if ay > ax:
         r = ax / ay
@@ -37,10 +38,9 @@ def _atan2(y, x, poly):
         r = ay / ax
     else:
         return 0.0
-    r2 = r * r
-    p = poly[poly.shape[0] - 1]
-    for i in range(poly.shape[0] - 2, -1, -1):
-        p = p * r2 + poly[i]
+    t = r * r
+    t2 = t * t
+    p = (c0 + c1 * t) + t2 * (c2 + c3 * t) + t2 * t2 * ((c4 + c5 * t) + t2 * (c6 + c7 * t))
     a = r * p
     if ay > ax:
         a = 0.5 * math.pi - a
@@ -59,6 +59,7 @@ def perspective_map(rot, fx, fy, cx, cy, cube, src_h, src_w, axis_of, sign_of, p
     h, w = out_x.shape
     s = float(src_h)
     ifx = 1.0 / fx
+    c0, c1, c2, c3, c4, c5, c6, c7 = poly[0], poly[1], poly[2], poly[3], poly[4], poly[5], poly[6], poly[7]
     for v in prange(h):
         ry = (v - cy) / fy
         for u in range(w):
@@ -84,7 +85,7 @@ def perspective_map(rot, fx, fy, cx, cy, cube, src_h, src_w, axis_of, sign_of, p
                 out_x[v, u] = (a + 1) * 0.5 * s - 0.5 + 1.0
                 out_y[v, u] = (b + 1) * 0.5 * s - 0.5 + 1.0 + face * (s + 2.0)
             else:
-                lon = _atan2(dx, dz, poly)
-                lat = _atan2(-dy, math.sqrt(dx * dx + dz * dz), poly)
+                lon = _atan2(dx, dz, c0, c1, c2, c3, c4, c5, c6, c7)
+                lat = _atan2(-dy, math.sqrt(dx * dx + dz * dz), c0, c1, c2, c3, c4, c5, c6, c7)
                 out_x[v, u] = (lon / (2 * math.pi) + 0.5) * src_w - 0.5
                 out_y[v, u] = (0.5 - lat / math.pi) * src_h - 0.5
