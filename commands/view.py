@@ -168,6 +168,9 @@ def run(args) -> int:
         if Path(args.pano).suffix.lower() == ".json":  # a tour of several panoramas (panorama.tour)
             from panorama.tour import load_tour
 
+            if args.stereo != "none":
+                raise ValueError("--stereo: a tour's scenes are mono panoramas; view a stereo panorama on its own")
+
             load_tour(args.pano)  # every scene, hotspot and link checked before the site is written
             return _serve(args, Path(args.pano), "tour")
         if args.stereo != "none":
@@ -180,6 +183,8 @@ def run(args) -> int:
         return _serve(args, pano, layout)
     if args.force:
         raise ValueError("--force: only with --site")
+    if Path(args.pano).suffix.lower() == ".json":
+        raise ValueError(f"PANO: {args.pano} is a tour file; tours are shown by the web viewer: add --serve or --site DIR")
     if args.output is None:
         raise ValueError("-o/--output: required unless --serve is given")
     out = Path(args.output)

@@ -128,6 +128,9 @@ def test_tour_files_are_checked(tmp_path, tour_site):
         {"yaw": 0, "pitch": 0, "scene": "attic"}]}}}))
     assert cli.main(["view", str(tmp_path / "bad.json"), "--site", str(tmp_path / "s2")]) == 1
     assert not (tmp_path / "s2").exists()
+    assert cli.main(["view", str(tmp_path / "tour.json"), "--stereo", "sbs", "--site", str(tmp_path / "s4")]) == 1
+    assert cli.main(["view", str(tmp_path / "tour.json"), "-o", str(tmp_path / "v.png")]) == 1
+    assert not (tmp_path / "s4").exists() and not (tmp_path / "v.png").exists()
     assert cli.main(["view", str(tmp_path / "tour.json"), "--site", str(tmp_path / "s3")]) == 0
     assert (tmp_path / "s3" / "scene-kitchen-nz.png").is_file() and (tmp_path / "s3" / "viewer.json").is_file()
 
