@@ -276,3 +276,26 @@ def test_cli_blender_script_path_and_import(tmp_path, capsys):
                      "--out", str(tmp_path / "t.json")]) == 0
     doc = json.loads((tmp_path / "t.json").read_text())
     assert doc["frames"][0]["file_path"] == "v/camA_0001_color.png"
+
+
+def test_other_tools_keys_are_ignored_and_misspellings_refused(tmp_path):
+    """nerfstudio / instant-ngp keys we do not use are listed in the report, never refused; a key
+    a letter or two from one we read is a misspelling."""
+    from ibr.io.importers.common import ImportReport
+
+    t = json.loads((RGB / "transforms.json").read_text())
+    t.update({"aabb_scale": 16, "scale": 0.33, "offset": [0.5, 0.5, 0.5], "sharpness": 800.0,
+              "ply_file_path": "sparse_pc.ply", "applied_transform": [[1, 0, 0, 0]]})
+    for fr in t["frames"]:
+        fr.update({"mask_path": "m.png", "colmap_im_id": 1})
+    for f in RGB.glob("cam*_*.*"):
+        shutil.copy(f, tmp_path)
+    (tmp_path / "t.json").write_text(json.dumps(t))
+    rep = ImportReport()
+    assert len(read_frames("nerf", tmp_path / "t.json", report=rep)) == 2
+    assert {"aabb_scale", "scale", "offset", "sharpness", "ply_file_path", "applied_transform", "mask_path",
+            "colmap_im_id"} <= set(rep.ignored_keys)
+    t["frames"][0]["fil_path"] = t["frames"][0].pop("file_path")
+    (tmp_path / "t.json").write_text(json.dumps(t))
+    with pytest.raises(ValueError, match=r"frames\[0\]: unknown key 'fil_path' \(did you mean 'file_path'\?\)"):
+        read_frames("nerf", tmp_path / "t.json")

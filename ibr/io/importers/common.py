@@ -11,7 +11,6 @@ from typing import Callable, Iterable
 import numpy as np
 
 from ...base.camera import Camera
-from ...base.validate import nearest_name
 from ...base.view import View
 from ..images import read_depth, read_image
 from ..view_files import save_view
@@ -55,15 +54,23 @@ class ImportReport:
         return out
 
 
+#: How alike (difflib ratio) an unknown key must be to one we read to count as its misspelling.
+#: 0.85 refuses "transfrom_matrix", "fil_path", "cam_angle_x" and keeps other tools' own keys
+#: such as nerfstudio's "ply_file_path", "mask_path", "depth_unit_scale" or "camera_id".
+NEAR_MISS = 0.85
+
+
 def check_foreign_keys(where: str, doc: dict, used: Iterable[str], report: ImportReport | None) -> None:
     """Other tools' files carry keys we do not need (ignored, and listed in the report); a key
-    that is a near miss of one we read is a misspelling and refused with the nearest name."""
+    that is a near miss of one we read (:data:`NEAR_MISS`) is a misspelling and refused."""
+    import difflib
+
     used = tuple(used)
     for key in doc:
         if key in used:
             continue
-        near = nearest_name(key, used)
-        if near is not None:
+        ratio, near = max((difflib.SequenceMatcher(None, str(key), u).ratio(), u) for u in used if len(u) >= 5)
+        if ratio >= NEAR_MISS:
             raise ValueError(f"{where}: unknown key {key!r} (did you mean {near!r}?)")
         if report is not None:
             report.ignored_keys.append(key)
