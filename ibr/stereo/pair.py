@@ -101,7 +101,7 @@ class MappedLayer:
 
 
 def map_pixels(view: View, *, dx: float, dz: float = 0.0, dpixel: float = 0.0,
-               method: str = "pixel", max_jump_px: float = 1.0) -> MappedLayer:
+               method: str = "pixel", max_jump_px: float = 1.0, _color32: np.ndarray | None = None) -> MappedLayer:
     """Seed 003 method 2: map every source pixel into the view of an eye at offset (dx, 0, dz).
 
     ``u' = fx (X - dx)/(Z - dz) + cx + dpixel``, ``v' = fy Y/(Z - dz) + cy`` (camera frame of the
@@ -119,8 +119,7 @@ def map_pixels(view: View, *, dx: float, dz: float = 0.0, dpixel: float = 0.0,
     check_choice("method", method, ("pixel", "splat"))
     jump = check_positive("max_jump_px", max_jump_px, allow_inf=True)
     cam = view.camera
-    col = np.asarray(view.color)
-    col = np.ascontiguousarray((col[..., None] if col.ndim == 2 else col).astype(np.float32, copy=False))
+    col = _color32 if _color32 is not None else _float_color(view)  # (both eyes share one conversion)
     h, w, c = col.shape
     out_c = np.zeros((h, w, c), np.float32)
     out_z = np.full((h, w), np.inf, np.float32)
@@ -158,16 +157,25 @@ class StereoPair:
     right_camera: Camera
 
 
+def _float_color(view: View) -> np.ndarray:
+    """(H, W, C) float32 C-contiguous colour of a view (its values, not rescaled)."""
+    col = np.asarray(view.color)
+    return np.ascontiguousarray((col[..., None] if col.ndim == 2 else col).astype(np.float32, copy=False))
+
+
 def _to_dtype(img: np.ndarray, dtype) -> np.ndarray:
+    """``img`` (a fresh float32 array: rounded and clipped in place) in ``dtype``."""
     if img.shape[2] == 1:
         img = img[..., 0]
     if np.dtype(dtype).kind in "ui":
         info = np.iinfo(dtype)
-        return np.clip(np.rint(img), info.min, info.max).astype(dtype)
+        np.rint(img, out=img)
+        np.clip(img, info.min, info.max, out=img)
+        return img.astype(dtype)
     return img.astype(dtype, copy=False)
 
 
-def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, mesh=None):
+def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, mesh=None, color32=None):
     src = view.camera
     if method == "mesh":
         from ..render.rasterize import render_mesh
@@ -184,7 +192,7 @@ def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, me
     if abs(dz) <= 1e-12 * max(1.0, abs(dx)):  # round-off of the pose products
         dz = 0.0
     layer = map_pixels(view, dx=dx, dz=dz, dpixel=eye_cam.cx - src.cx,
-                       method="pixel" if method == "pixel" else "splat", max_jump_px=max_jump_px)
+                       method="pixel" if method == "pixel" else "splat", max_jump_px=max_jump_px, _color32=color32)
     return layer.color, layer.depth, layer.coverage
 
 
@@ -228,12 +236,13 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
 
         mesh = build_mesh(view, **(mesh_options or {}))  # one mesh serves both eyes
     out = {}
+    color32 = None if method == "mesh" else _float_color(view)
     for eye, cam in (("left", left_cam), ("right", right_cam)):
         if cam is view.camera:  # the kept eye: the original frame, untouched
             col = np.asarray(view.color)
             out[eye] = (col.copy(), view.depth.copy(), np.zeros(view.shape, bool))
             continue
-        c, d, cov = _render_eye(view, cam, method, max_jump_px, mesh)
+        c, d, cov = _render_eye(view, cam, method, max_jump_px, mesh, color32)
         c = np.ascontiguousarray(c[..., None] if c.ndim == 2 else c, dtype=np.float32)
         d = np.ascontiguousarray(d, dtype=np.float32)
         holes = np.zeros(cov.shape, np.bool_)
