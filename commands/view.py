@@ -43,6 +43,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--force", action="store_true",
                         help="with --site: use a non-empty folder, replacing only the viewer's files there")
     parser.add_argument("--face-size", type=image_side, default=None, help="face size for --serve")
+    parser.add_argument("--tiles", action="store_true",
+                        help="with --serve/--site: a multires tile pyramid (512-px tiles, faces up to 4096 px) "
+                        "that the page loads as the view needs it: large panoramas open fast")
     parser.add_argument("--stereo", choices=("none", "top-bottom", "sbs"), default="none",
                         help="PANO is an ODS pair (ibr stitch --stereo ods): left eye on top (top-bottom) or "
                         "left | right (sbs); stills and tours show both eyes as --stereo-out; --serve/--site "
@@ -113,14 +116,14 @@ def _serve(args, pano, layout) -> int:
 
                     write_tour_site(to, tour, face_size=args.face_size, force=True)
                 else:
-                    write_site(to, pano, layout=layout, face_size=args.face_size, stereo=stereo)
+                    write_site(to, pano, layout=layout, face_size=args.face_size, stereo=stereo, tiles=args.tiles)
 
             if temporary:
                 write(folder)
             else:
                 with OutputPlan("ibr view", log=info) as plan:
                     plan.add_input("PANO", args.pano)
-                    site = plan.add_folder("--site", folder, SITE_FILES + ("scene-*-*.png",))
+                    site = plan.add_folder("--site", folder, SITE_FILES + ("scene-*-*.png", "tile-*.png"))
                     plan.check()
                     write(plan.stage(site))
                     plan.commit()

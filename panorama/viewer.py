@@ -27,6 +27,7 @@ import shutil
 import threading
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from .convert import equirect_to_cubemap, perspective
@@ -109,7 +110,7 @@ def tour_views(pano, n: int, *, pitch_deg: float = 0.0, fov_deg: float = 90.0, w
 
 
 def write_site(folder, pano, *, layout: str | None = None, face_size: int | None = None,
-               force: bool = False, stereo: str | None = None) -> Path:
+               force: bool = False, stereo: str | None = None, tiles: bool = False) -> Path:
     """Write ``index.html``, ``viewer.json`` and the faces into ``folder``; return the page's path.
 
     ``pano`` is an equirect image (converted to faces of ``face_size``, default width / pi rounded
@@ -117,19 +118,35 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     power-of-two sizes) or a cubemap in ``layout``. With ``stereo``
     (``"top-bottom"`` or ``"sbs"``, :data:`STEREO_LAYOUTS`) ``pano`` is a packed ODS pair: the left
     eye goes to ``px.png .. nz.png``, the right eye to ``px_r.png .. nz_r.png``. ``folder`` must
-    be new or empty unless ``force`` (:func:`check_site_folder`).
+    be new or empty unless ``force`` (:func:`check_site_folder`). With ``tiles`` the faces (default
+    the panorama's own resolution, up to 4096 px) become a multires pyramid
+    (:mod:`panorama.tiles`): base faces of 512 px, then levels of 512-px tiles the page loads as
+    the view needs them.
     """
+    if tiles and stereo is not None:
+        raise ValueError("tiles: tile pyramids are for mono panoramas (a stereo pair holds two face sets)")
     eyes = split_stereo(pano, stereo) if stereo is not None else (pano,)
     if face_size is not None and face_size > MAX_FACE_SIZE:
         raise ValueError(f"face_size: {face_size} px faces exceed what phones and many GPUs show "
                          f"({MAX_FACE_SIZE} px per cube face); choose --face-size <= {MAX_FACE_SIZE}")
     folder = check_site_folder(folder, force=force)
+    if tiles and face_size is None:  # the panorama's own resolution, a power of two, <= 4096
+        w = pano.shape[1] if isinstance(pano, np.ndarray) and pano.shape[1] == 2 * pano.shape[0] else None
+        face_size = MAX_FACE_SIZE if w is None else int(min(MAX_FACE_SIZE, 2 ** int(np.ceil(np.log2(max(w / np.pi, 512))))))
     faces_per_eye = [_faces(eye, layout, face_size) for eye in eyes]  # all converted before writing
+    config = {"stereo": stereo is not None}
     folder.mkdir(parents=True, exist_ok=True)
+    if tiles:
+        from .tiles import TILE, write_tiles
+
+        top = faces_per_eye[0]
+        config["tiles"] = write_tiles(folder, top, _FACES, TILE, write_image)
+        faces_per_eye = [[cv2.resize(f, (TILE, TILE), interpolation=cv2.INTER_AREA) if f.shape[0] != TILE else f
+                          for f in top]]
     for faces, suffix in zip(faces_per_eye, ("", "_r")):
         for name, face in zip(_FACES, faces):
             write_image(folder / f"{name}{suffix}.png", face)
-    (folder / "viewer.json").write_text(json.dumps({"stereo": stereo is not None}) + "\n")
+    (folder / "viewer.json").write_text(json.dumps(config) + "\n")
     page = folder / "index.html"
     shutil.copyfile(WEB_DIR / "index.html", page)
     return page
@@ -149,7 +166,8 @@ def _faces(pano, layout, face_size):
 
 
 #: A tour scene's face file (``panorama.tour``): scene-<id>-px.png ..
-_TOUR_FACE = re.compile(r"^scene-[A-Za-z0-9][A-Za-z0-9_-]{0,63}-(px|nx|py|ny|pz|nz)\.png$")
+_TOUR_FACE = re.compile(r"^scene-[A-Za-z0-9][A-Za-z0-9_-]{0,63}-(px|nx|py|ny|pz|nz)\.png$"
+                        r"|^tile-[0-9]{1,2}-(px|nx|py|ny|pz|nz)-[0-9]{1,3}-[0-9]{1,3}\.png$")  # and tiles
 
 
 class _SiteHandler(http.server.SimpleHTTPRequestHandler):

@@ -145,3 +145,53 @@ def test_faces_over_the_device_limit_are_refused_or_explained(tmp_path):
     assert not (tmp_path / "s").exists()
     page = (WEB_DIR / "index.html").read_text()
     assert "MAX_CUBE_MAP_TEXTURE_SIZE" in page and "write the site with a smaller --face-size" in page
+
+
+@pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
+def test_tiles_load_only_what_a_zoomed_view_needs(tmp_path):
+    """A 4096-wide panorama as a tile pyramid (base faces 512, levels 1024 and 2048): zoomed to
+    30 degrees at yaw 0 the page needs faces of >= 2 f = 1194 px, i.e. level 2, and fetches only
+    the four tiles of face +z around its centre (tan 15 deg = 0.27 of the half face); the picture
+    matches the full-resolution faces. At 100 degrees the base faces suffice: no tile is fetched."""
+    import functools
+    import http.server
+    import threading
+
+    from panorama.viewer import _SiteHandler
+
+    d = equirect_directions(4096, 2048)
+    lon, lat = np.arctan2(d[..., 0], d[..., 2]), np.arcsin(-d[..., 1])
+    # detail the base faces cannot hold: a period of 0.3 degrees is 6.8 px on 2048-px faces, 1.7 on 512
+    eq = np.stack([0.5 + 0.4 * np.sin(1200 * lon) * np.cos(900 * lat), 0.5 + 0.4 * np.cos(25 * lat),
+                   0.5 + 0.3 * np.sin(13 * lon + 7 * lat)], -1).astype(np.float32)
+    site = tmp_path / "site"
+    write_site(site, eq, tiles=True)
+    assert read_image(site / "px.png").shape[0] == 512 and (site / "tile-2-pz-3-3.png").is_file()
+    assert not (site / "tile-3-pz-0-0.png").exists()
+    requested = []
+
+    class Recorder(_SiteHandler):
+        def send_head(self):
+            requested.append(self.path.split("?")[0].lstrip("/"))
+            return super().send_head()
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(Recorder, directory=str(site)))
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        zoom = dict(yaw_deg=0.0, pitch_deg=0.0, roll_deg=0.0, fov_deg=30.0)
+        shot = _screenshot(site_url(server, hud=False, **zoom), tmp_path / "zoom.png")
+        zoom_tiles = sorted(p for p in requested if p.startswith("tile-"))
+        requested.clear()
+        _screenshot(site_url(server, hud=False, yaw_deg=0.0, pitch_deg=0.0, fov_deg=100.0), tmp_path / "wide.png")
+        wide_tiles = [p for p in requested if p.startswith("tile-")]
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert zoom_tiles == ["tile-2-pz-1-1.png", "tile-2-pz-1-2.png", "tile-2-pz-2-1.png", "tile-2-pz-2-2.png"]
+    assert wide_tiles == []
+    def view(size):
+        faces = P.equirect_to_cubemap(eq, size, layout="list")
+        return P.perspective([np.rint(np.clip(f, 0, 1) * 255).astype(np.uint8) for f in faces], width=W, height=H,
+                             **zoom)
+
+    assert _psnr(shot, view(2048)) > 35 and _psnr(view(512), view(2048)) < 30  # the tiles made the detail
