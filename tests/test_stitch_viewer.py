@@ -109,3 +109,30 @@ def test_web_viewer_stereo_modes_match_each_eye(tmp_path, ods_pair):
     finally:
         server.shutdown()
         server.server_close()
+
+
+@pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
+def test_side_by_side_with_lens_predistortion(tmp_path, ods_pair):
+    """?lens=c1,c2 pre-distorts each eye of the side-by-side mode like ibr.stereo.predistort of
+    that eye's perspective view (same radial model and pixel convention)."""
+    from ibr.stereo.lens import RadialDistortion, predistort
+
+    left, right = ods_pair
+    site = tmp_path / "site"
+    write_site(site, np.concatenate([left, right], axis=0), face_size=64, stereo="top-bottom")
+    half = W // 2
+    lens = RadialDistortion(0.22, 0.05)
+    server = serve(site)
+    try:
+        sbs = _screenshot(site_url(server, hud=False, mode="sbs", **VIEW) + "&lens=0.22,0.05", tmp_path / "lens.png")
+    finally:
+        server.shutdown()
+        server.server_close()
+    for k, suffix in enumerate(("", "_r")):
+        faces = [read_image(site / f"{n}{suffix}.png") for n in ("px", "nx", "py", "ny", "pz", "nz")]
+        plain = P.perspective(faces, width=half, height=H, **VIEW)
+        want = predistort(plain, lens)
+        got = sbs[:, k * half:(k + 1) * half]
+        diff = np.abs(got - want.astype(np.int16)).max(-1)
+        assert np.median(diff) <= 1 and np.percentile(diff, 97) <= 4  # the black border ring differs by a pixel
+        assert np.abs(got - plain.astype(np.int16)).mean() > 5 * max(np.abs(got - want.astype(np.int16)).mean(), 0.2)
