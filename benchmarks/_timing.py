@@ -42,3 +42,16 @@ def paired_ms(fn, base_fn, repeats: int) -> tuple[float, float]:
         ts.append(t2 - t1)
         ratios.append((t2 - t1) / (t1 - t0))
     return float(np.median(ts) * 1e3), float(np.median(ratios))
+
+
+def report(rows, header, results_file) -> None:
+    """Print ``rows`` (tuples of strings) under ``header`` (same length) with aligned columns and
+    write them to ``results_file`` (``|``-separated), creating its folder."""
+    from pathlib import Path
+
+    widths = [max(len(str(x)) for x in col) for col in zip(header, *rows)]
+    for row in (header, *rows):
+        print("  ".join(str(x).ljust(w) for x, w in zip(row, widths)).rstrip())
+    path = Path(results_file)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(" | ".join(map(str, r)) for r in rows) + "\n")

@@ -31,7 +31,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(ROOT))
 
-from _timing import median_seconds, paired_ms  # noqa: E402
+from _timing import median_seconds, paired_ms, report  # noqa: E402
 
 RESULTS = HERE / "results"
 
@@ -71,11 +71,13 @@ def perspective_rows(rows, quick: bool, repeats: int) -> None:
     note = f"{ratio:.1f}x one cv2.remap"
     try:
         import py360convert as py360
-
+    except ImportError:
+        py360 = None
+    if py360 is not None:
         theirs = lambda: py360.e2p(img, fov_deg=(90.0, 58.7), u_deg=next(yaw), v_deg=5.0, out_hw=(ph, pw))  # noqa: E731
         ms_py, r_py = paired_ms(theirs, ours, max(3, repeats // 3))
         note += f"; py360convert e2p {ms_py:.0f} ms = {r_py:.1f}x ours (target >= 15x)"
-    except ImportError:
+    else:
         note += "; py360convert not installed"
     rows.append((f"perspective {pw}x{ph} at a new yaw, {w}-wide equirect", f"{ms:.1f} ms", note + "; target <= 20 ms"))
     from panorama.viewer import tour_views
@@ -89,13 +91,10 @@ def perspective_rows(rows, quick: bool, repeats: int) -> None:
                  f"{t_tour / t_floor:.1f}x 36 remaps; target <= 3 s"))
     s = w // 4
     ours_e2c = lambda: P.equirect_to_cubemap(img, s, layout="list")  # noqa: E731
-    try:
-        import py360convert as py360
-
+    if py360 is not None:
         ms_e2c, r = paired_ms(lambda: py360.e2c(img, face_w=s, cube_format="list"), ours_e2c, repeats)
-        rows.append((f"e2c {w}x{h} -> {s}^2 faces", f"{ms_e2c / r:.1f} ms", f"py360convert {ms_e2c:.1f} ms = {r:.2f}x ours (target >= 2x)"))
-    except ImportError:
-        pass
+        rows.append((f"e2c {w}x{h} -> {s}^2 faces", f"{ms_e2c / r:.1f} ms",
+                     f"py360convert {ms_e2c:.1f} ms = {r:.2f}x ours (target >= 2x)"))
 
 
 def render_rows(rows, quick: bool, repeats: int) -> None:
@@ -165,13 +164,8 @@ def main(argv=None) -> int:
     render_rows(rows, args.quick, repeats)
     if not args.quick:
         peak_rss(rows)
-    load = os.getloadavg()[0]
-    width = max(len(r[0]) for r in rows)
-    print(f"{'measure':<{width}}  {'value':>16}  ratio to the peer/floor timed in the same run (load {load:.2f})")
-    for name, value, note in rows:
-        print(f"{name:<{width}}  {value:>16}  {note}")
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "speed.txt").write_text("\n".join(" | ".join(r) for r in rows) + "\n")
+    report(rows, ("measure", "value", f"ratio to the peer/floor timed in the same run (load {os.getloadavg()[0]:.2f})"),
+           RESULTS / "speed.txt")
     return 0
 
 

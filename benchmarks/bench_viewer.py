@@ -27,6 +27,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parent / "tests"))
+sys.path.insert(0, str(HERE))
+
+from _timing import report  # noqa: E402
 
 RESULTS = HERE / "results"
 W, H = 800, 450
@@ -105,11 +108,7 @@ def main(argv=None) -> int:
         measure(whole, f"whole faces ({face} px, loaded at once)", rows)
     print(f"\n{width}x{width // 2} panorama, {W}x{H} page, fov 30, headless Chromium (SwiftShader), "
           f"load {os.getloadavg()[0]:.2f}")
-    print(f"{'site':<44} {'first picture':>14} {'frame':>9}  fetched")
-    for label, first, frame, fetched in rows:
-        print(f"{label:<44} {first:>14} {frame:>9}  {fetched}")
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "viewer.txt").write_text("\n".join(" | ".join(r) for r in rows) + "\n")
+    report(rows, ("site", "first picture", "frame", "fetched"), RESULTS / "viewer.txt")
     return 0
 
 
