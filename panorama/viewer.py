@@ -132,7 +132,7 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     folder = check_site_folder(folder, force=force)
     if tiles and face_size is None:  # the panorama's own resolution, a power of two, <= 4096
         w = pano.shape[1] if isinstance(pano, np.ndarray) and pano.shape[1] == 2 * pano.shape[0] else None
-        face_size = MAX_FACE_SIZE if w is None else int(min(MAX_FACE_SIZE, 2 ** int(np.ceil(np.log2(max(w / np.pi, 512))))))
+        face_size = MAX_FACE_SIZE if w is None else _pow2_face_size(w, 512, MAX_FACE_SIZE)
     faces_per_eye = [_faces(eye, layout, face_size) for eye in eyes]  # all converted before writing
     config = {"stereo": stereo is not None}
     folder.mkdir(parents=True, exist_ok=True)
@@ -152,12 +152,18 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     return page
 
 
+def _pow2_face_size(width: int, smallest: int, largest: int) -> int:
+    """Faces for a ``width``-wide equirect: the power of two >= width / pi (its own resolution),
+    within [smallest, largest]."""
+    return int(min(largest, 2 ** int(np.ceil(np.log2(max(width / np.pi, smallest))))))
+
+
 def _faces(pano, layout, face_size):
     """Six uint8 faces (px, nx, py, ny, pz, nz) of an equirect image or a cubemap."""
     if layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
                                 and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
         if face_size is None:  # a power of two (mipmaps on WebGL1 too), >= width / pi, <= 2048
-            face_size = int(min(2048, 2 ** int(np.ceil(np.log2(max(pano.shape[1] / np.pi, 8))))))
+            face_size = _pow2_face_size(pano.shape[1], 8, 2048)
         faces = equirect_to_cubemap(pano, face_size, layout="list")
     else:
         from .convert import detect_layout
@@ -165,8 +171,8 @@ def _faces(pano, layout, face_size):
     return [to_uint8(np.ascontiguousarray(f)) for f in faces]
 
 
-#: A tour scene's face file (``panorama.tour``): scene-<id>-px.png ..
-_TOUR_FACE = re.compile(r"^scene-[A-Za-z0-9][A-Za-z0-9_-]{0,63}-(px|nx|py|ny|pz|nz)\.png$"
+#: Site files beyond SITE_FILES: a tour scene's faces (``panorama.tour``), scene-<id>-px.png .., and tiles
+_EXTRA_SITE_FILE = re.compile(r"^scene-[A-Za-z0-9][A-Za-z0-9_-]{0,63}-(px|nx|py|ny|pz|nz)\.png$"
                         r"|^tile-[0-9]{1,2}-(px|nx|py|ny|pz|nz)-[0-9]{1,3}-[0-9]{1,3}\.png$")  # and tiles
 
 
@@ -178,7 +184,7 @@ class _SiteHandler(http.server.SimpleHTTPRequestHandler):
 
     def send_head(self):
         name = self.path.split("?", 1)[0].split("#", 1)[0].lstrip("/") or "index.html"
-        if name not in SITE_FILES and not _TOUR_FACE.match(name):
+        if name not in SITE_FILES and not _EXTRA_SITE_FILE.match(name):
             self.send_error(404, "Not part of the viewer site")
             return None
         return super().send_head()
