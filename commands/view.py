@@ -13,7 +13,7 @@ HELP = "render a perspective view of a panorama (equirect, cubemap or face folde
 
 
 def add_arguments(parser) -> None:
-    from ._common import finite_float, frame_count, frame_rate, image_side, number_in, port_number
+    from ._common import finite_float, frame_count, frame_rate, image_side, number_in, port_number, positive_float
 
     parser.add_argument("pano", help="equirect image (2:1), cubemap image (horizon, vstrip, dice) or "
                         "a folder of px/nx/py/ny/pz/nz face files; with --serve/--site also a tour file "
@@ -46,6 +46,13 @@ def add_arguments(parser) -> None:
     parser.add_argument("--tiles", action="store_true",
                         help="with --serve/--site: a multires tile pyramid (512-px tiles, faces up to 4096 px) "
                         "that the page loads as the view needs it: large panoramas open fast")
+    parser.add_argument("--depth", default=None, metavar="DEPTH",
+                        help="with --serve/--site: range along each ray for an equirect PANO (what ibr stitch "
+                        "writes as <stem>_depth.exr); the page draws the scene as quad meshes and shows "
+                        "parallax when you move (keys w a s d q e, shift-drag)")
+    parser.add_argument("--head-box", type=positive_float, default=0.1,
+                        help="with --depth: how far the viewpoint may move from the centre, scene units "
+                        "(the meshes' level of detail is chosen for this move)")
     parser.add_argument("--stereo", choices=("none", "top-bottom", "sbs"), default="none",
                         help="PANO is an ODS pair (ibr stitch --stereo ods): left eye on top (top-bottom) or "
                         "left | right (sbs); stills and tours show both eyes as --stereo-out; --serve/--site "
@@ -95,7 +102,7 @@ def _show_pair(left, right, how: str):
     return pack_stereo(left, right, "anaglyph" if how == "anaglyph" else "sbs")
 
 
-def _serve(args, pano, layout) -> int:
+def _serve(args, pano, layout, depth=None) -> int:
     from ibr.io.outputs import OutputPlan
     from panorama.viewer import SITE_FILES, check_site_folder, serve, site_url, write_site
 
@@ -116,13 +123,16 @@ def _serve(args, pano, layout) -> int:
 
                     write_tour_site(to, tour, face_size=args.face_size, force=True)
                 else:
-                    write_site(to, pano, layout=layout, face_size=args.face_size, stereo=stereo, tiles=args.tiles)
+                    write_site(to, pano, layout=layout, face_size=args.face_size, stereo=stereo, tiles=args.tiles,
+                               depth=depth, head_box=args.head_box)
 
             if temporary:
                 write(folder)
             else:
                 with OutputPlan("ibr view", log=info) as plan:
                     plan.add_input("PANO", args.pano)
+                    if args.depth is not None:
+                        plan.add_input("--depth", args.depth)
                     site = plan.add_folder("--site", folder, SITE_FILES + ("scene-*-*.png", "tile-*.png"))
                     plan.check()
                     write(plan.stage(site))
@@ -156,6 +166,21 @@ def _serve(args, pano, layout) -> int:
     return 0
 
 
+def _read_site_depth(args, pano, layout):
+    """The --depth range map, checked against PANO before anything is written."""
+    from ibr.io import read_depth
+    from panorama.viewer import check_depth_site
+
+    if args.stereo != "none" or args.tiles or Path(args.pano).suffix.lower() == ".json":
+        raise ValueError("--depth: parallax from depth is for one mono panorama without --tiles or --stereo")
+    depth = read_depth(args.depth, what="--depth")
+    try:
+        check_depth_site(pano, layout, None, False, depth)
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("depth:", "--depth:", 1).replace("pano", "PANO")) from None
+    return depth
+
+
 def run(args) -> int:
     import panorama
     from ibr.io import write_image
@@ -183,7 +208,10 @@ def run(args) -> int:
             split_stereo(pano, args.stereo)  # the packing is checked before the site is written
         else:
             pano, layout = read_panorama(args.pano, layout=args.layout)
-        return _serve(args, pano, layout)
+        depth = _read_site_depth(args, pano, layout) if args.depth is not None else None
+        return _serve(args, pano, layout, depth)
+    if args.depth is not None:
+        raise ValueError("--depth: parallax from depth is shown by the web viewer: add --serve or --site DIR")
     if args.force:
         raise ValueError("--force: only with --site")
     if Path(args.pano).suffix.lower() == ".json":

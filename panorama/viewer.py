@@ -35,13 +35,13 @@ from .directions import FACE_FILE_NAMES
 from ibr.io import write_image
 from .layouts import unpack_faces
 
-__all__ = ["SITE_FILES", "STEREO_LAYOUTS", "VIEW_MODES", "WEB_DIR", "check_site_folder", "serve", "site_url",
-           "split_stereo", "to_uint8", "tour_views", "write_site"]
+__all__ = ["SITE_FILES", "STEREO_LAYOUTS", "VIEW_MODES", "WEB_DIR", "check_depth_site", "check_site_folder", "serve",
+           "site_url", "split_stereo", "to_uint8", "tour_views", "write_site"]
 
 WEB_DIR = Path(__file__).with_name("web")
 #: The files of a viewer site: what write_site writes and the only files serve() serves.
 _FACES = FACE_FILE_NAMES  # px, nx, py, ny, pz, nz
-SITE_FILES = (("index.html", "viewer.json") + tuple(f"{n}.png" for n in _FACES)
+SITE_FILES = (("index.html", "viewer.json", "mesh.bin") + tuple(f"{n}.png" for n in _FACES)
               + tuple(f"{n}_r.png" for n in _FACES))
 #: Largest cube face the site writes: 4096 px is the safe WebGL cube-map size on phones (the page
 #: also checks its own device's MAX_CUBE_MAP_TEXTURE_SIZE and says so instead of a black page).
@@ -110,7 +110,8 @@ def tour_views(pano, n: int, *, pitch_deg: float = 0.0, fov_deg: float = 90.0, w
 
 
 def write_site(folder, pano, *, layout: str | None = None, face_size: int | None = None,
-               force: bool = False, stereo: str | None = None, tiles: bool = False) -> Path:
+               force: bool = False, stereo: str | None = None, tiles: bool = False, depth=None,
+               head_box: float = 0.1) -> Path:
     """Write ``index.html``, ``viewer.json`` and the faces into ``folder``; return the page's path.
 
     ``pano`` is an equirect image (converted to faces of ``face_size``, default width / pi rounded
@@ -121,10 +122,16 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     be new or empty unless ``force`` (:func:`check_site_folder`). With ``tiles`` the faces (default
     the panorama's own resolution, up to 4096 px) become a multires pyramid
     (:mod:`panorama.tiles`): base faces of 512 px, then levels of 512-px tiles the page loads as
-    the view needs them.
+    the view needs them. With ``depth`` (an (H, 2H) float range map of an equirect ``pano``,
+    scene units, NaN = none) the site also holds ``mesh.bin``, the quad meshes of the six faces
+    (:mod:`panorama.face_meshes`, level of detail for a move of ``head_box``), and the page shows
+    motion parallax when the viewpoint moves; face pixels without depth get alpha 0 (drawn at
+    infinity).
     """
     if tiles and stereo is not None:
         raise ValueError("tiles: tile pyramids are for mono panoramas (a stereo pair holds two face sets)")
+    if depth is not None:
+        check_depth_site(pano, layout, stereo, tiles, depth)
     eyes = split_stereo(pano, stereo) if stereo is not None else (pano,)
     if face_size is not None and face_size > MAX_FACE_SIZE:
         raise ValueError(f"face_size: {face_size} px faces exceed what phones and many GPUs show "
@@ -135,6 +142,9 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
         face_size = MAX_FACE_SIZE if w is None else _pow2_face_size(w, 512, MAX_FACE_SIZE)
     faces_per_eye = [_faces(eye, layout, face_size) for eye in eyes]  # all converted before writing
     config = {"stereo": stereo is not None}
+    if depth is not None:
+        mesh_bytes, faces_per_eye[0] = _depth_mesh(pano, depth, faces_per_eye[0], head_box)
+        config["mesh"] = {"file": "mesh.bin", "head_box": float(head_box), "bytes": len(mesh_bytes)}
     folder.mkdir(parents=True, exist_ok=True)
     if tiles:
         from .tiles import TILE, write_tiles
@@ -143,6 +153,8 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
         config["tiles"] = write_tiles(folder, top, _FACES, TILE, write_image)
         faces_per_eye = [[cv2.resize(f, (TILE, TILE), interpolation=cv2.INTER_AREA) if f.shape[0] != TILE else f
                           for f in top]]
+    if depth is not None:
+        (folder / "mesh.bin").write_bytes(mesh_bytes)
     for faces, suffix in zip(faces_per_eye, ("", "_r")):
         for name, face in zip(_FACES, faces):
             write_image(folder / f"{name}{suffix}.png", face)
@@ -150,6 +162,39 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     page = folder / "index.html"
     shutil.copyfile(WEB_DIR / "index.html", page)
     return page
+
+
+def check_depth_site(pano, layout, stereo, tiles, depth) -> None:
+    """Refuse what a depth site cannot show: one mono equirect ``pano`` and a float range map
+    ``depth`` of its shape (positive, NaN where there is none)."""
+    if stereo is not None or tiles:
+        raise ValueError("depth: parallax from depth is for a mono panorama without tiles "
+                         "(drop --stereo / --tiles, or the depth)")
+    if not (isinstance(pano, np.ndarray) and pano.ndim in (2, 3) and pano.shape[1] == 2 * pano.shape[0]) \
+            or layout not in (None, "equirect"):
+        raise ValueError("depth: give the panorama as an equirect image (W = 2 H), the grid of its range map")
+    rng = np.asarray(depth)
+    if rng.shape != pano.shape[:2]:
+        raise ValueError(f"depth: expected shape {pano.shape[:2]} (the panorama's), got {rng.shape}")
+    if rng.dtype.kind != "f":
+        raise TypeError(f"depth: expected a float range map, got dtype {rng.dtype}")
+    with np.errstate(invalid="ignore"):
+        if np.any(rng <= 0) or np.all(np.isnan(rng)):
+            raise ValueError("depth: expected positive ranges along the rays (NaN where there is none), "
+                             "got values <= 0 or no depth at all")
+
+
+def _depth_mesh(pano, depth, faces, head_box):
+    """(mesh.bin bytes, faces with alpha 0 where a face pixel has no depth)."""
+    from .face_meshes import face_meshes, pack_face_meshes
+
+    meshes = face_meshes(pano, np.asarray(depth), face_size=faces[0].shape[0], head_box=head_box)
+    out = []
+    for face, mesh in zip(faces, meshes):
+        rgb = face if face.ndim == 3 else np.repeat(face[..., None], 3, -1)
+        alpha = np.where(mesh.quad_of_pixel >= 0, 255, 0).astype(np.uint8)
+        out.append(np.dstack([rgb[..., :3], alpha]))
+    return pack_face_meshes(meshes), out
 
 
 def _pow2_face_size(width: int, smallest: int, largest: int) -> int:
