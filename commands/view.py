@@ -44,7 +44,7 @@ def add_arguments(parser) -> None:
                         help="with --site: use a non-empty folder, replacing only the viewer's files there")
     parser.add_argument("--face-size", type=image_side, default=None, help="face size for --serve")
     parser.add_argument("--tiles", action="store_true",
-                        help="with --serve/--site: a multires tile pyramid (512-px tiles, faces up to 4096 px) "
+                        help="with --serve/--site: a multires tile pyramid (512-px tiles, faces up to 8192 px) "
                         "that the page loads as the view needs it: large panoramas open fast")
     parser.add_argument("--depth", default=None, metavar="DEPTH",
                         help="with --serve/--site: range along each ray for an equirect PANO (what ibr stitch "

@@ -46,6 +46,9 @@ SITE_FILES = (("index.html", "viewer.json", "mesh.bin") + tuple(f"{n}.png" for n
 #: Largest cube face the site writes: 4096 px is the safe WebGL cube-map size on phones (the page
 #: also checks its own device's MAX_CUBE_MAP_TEXTURE_SIZE and says so instead of a black page).
 MAX_FACE_SIZE = 4096
+#: Largest face of a tile pyramid: levels finer than a device's cube limit are drawn as their
+#: tiles (textured quads), so a 16384-wide panorama keeps its own resolution (faces of 8192 px).
+MAX_TILED_FACE_SIZE = 8192
 #: How a stereo panorama packs its eyes (what ``ibr stitch --stereo ods --layout`` writes).
 STEREO_LAYOUTS = ("top-bottom", "sbs")
 #: What the page shows of a stereo panorama (``?mode=``); mono panoramas show "mono" only.
@@ -120,7 +123,7 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     (``"top-bottom"`` or ``"sbs"``, :data:`STEREO_LAYOUTS`) ``pano`` is a packed ODS pair: the left
     eye goes to ``px.png .. nz.png``, the right eye to ``px_r.png .. nz_r.png``. ``folder`` must
     be new or empty unless ``force`` (:func:`check_site_folder`). With ``tiles`` the faces (default
-    the panorama's own resolution, up to 4096 px) become a multires pyramid
+    the panorama's own resolution, up to 8192 px) become a multires pyramid
     (:mod:`panorama.tiles`): base faces of 512 px, then levels of 512-px tiles the page loads as
     the view needs them. With ``depth`` (an (H, 2H) float range map of an equirect ``pano``,
     scene units, NaN = none) the site also holds ``mesh.bin``, the quad meshes of the six faces
@@ -133,13 +136,15 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     if depth is not None:
         check_depth_site(pano, layout, stereo, tiles, depth)
     eyes = split_stereo(pano, stereo) if stereo is not None else (pano,)
-    if face_size is not None and face_size > MAX_FACE_SIZE:
+    largest = MAX_TILED_FACE_SIZE if tiles else MAX_FACE_SIZE
+    if face_size is not None and face_size > largest:
         raise ValueError(f"face_size: {face_size} px faces exceed what phones and many GPUs show "
-                         f"({MAX_FACE_SIZE} px per cube face); choose --face-size <= {MAX_FACE_SIZE}")
+                         f"({largest} px per {'tiled face' if tiles else 'cube face; more with --tiles'}); "
+                         f"choose --face-size <= {largest}")
     folder = check_site_folder(folder, force=force)
-    if tiles and face_size is None:  # the panorama's own resolution, a power of two, <= 4096
+    if tiles and face_size is None:  # the panorama's own resolution, a power of two, <= 8192
         w = pano.shape[1] if isinstance(pano, np.ndarray) and pano.shape[1] == 2 * pano.shape[0] else None
-        face_size = MAX_FACE_SIZE if w is None else _pow2_face_size(w, 512, MAX_FACE_SIZE)
+        face_size = MAX_FACE_SIZE if w is None else _pow2_face_size(w, 512, MAX_TILED_FACE_SIZE)
     faces_per_eye = [_faces(eye, layout, face_size) for eye in eyes]  # all converted before writing
     config = {"stereo": stereo is not None}
     if depth is not None:

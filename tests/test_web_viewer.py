@@ -148,11 +148,14 @@ def test_faces_over_the_device_limit_are_refused_or_explained(tmp_path):
 
 
 @pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
-def test_tiles_load_only_what_a_zoomed_view_needs(tmp_path):
+@pytest.mark.parametrize("maxcube", [None, 1024])
+def test_tiles_load_only_what_a_zoomed_view_needs(tmp_path, maxcube):
     """A 4096-wide panorama as a tile pyramid (base faces 512, levels 1024 and 2048): zoomed to
     30 degrees at yaw 0 the page needs faces of >= 2 f = 1194 px, i.e. level 2, and fetches only
     the four tiles of face +z around its centre (tan 15 deg = 0.27 of the half face); the picture
-    matches the full-resolution faces. At 100 degrees the base faces suffice: no tile is fetched."""
+    matches the full-resolution faces. At 100 degrees the base faces suffice: no tile is fetched.
+    With a device limit of 1024-px cube faces (``?maxcube=1024``) level 2 is drawn as its tiles
+    (textured quads on the cube): the same four tiles, the same picture."""
     import functools
     import http.server
     import threading
@@ -179,10 +182,11 @@ def test_tiles_load_only_what_a_zoomed_view_needs(tmp_path):
     threading.Thread(target=server.serve_forever, daemon=True).start()
     try:
         zoom = dict(yaw_deg=0.0, pitch_deg=0.0, roll_deg=0.0, fov_deg=30.0)
-        shot = _screenshot(site_url(server, hud=False, **zoom), tmp_path / "zoom.png")
+        extra = f"&maxcube={maxcube}" if maxcube else ""
+        shot = _screenshot(site_url(server, hud=False, **zoom) + extra, tmp_path / "zoom.png")
         zoom_tiles = sorted(p for p in requested if p.startswith("tile-"))
         requested.clear()
-        _screenshot(site_url(server, hud=False, yaw_deg=0.0, pitch_deg=0.0, fov_deg=100.0), tmp_path / "wide.png")
+        _screenshot(site_url(server, hud=False, yaw_deg=0.0, pitch_deg=0.0, fov_deg=100.0) + extra, tmp_path / "wide.png")
         wide_tiles = [p for p in requested if p.startswith("tile-")]
     finally:
         server.shutdown()
