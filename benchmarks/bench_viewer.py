@@ -3,10 +3,12 @@ view change, multires tiles beside whole faces, in headless Chromium with softwa
 
     flock /tmp/ibr-bench.lock python benchmarks/bench_viewer.py            # 16384 x 8192
     python benchmarks/bench_viewer.py --quick                              # 4096 x 2048
+    python benchmarks/bench_viewer.py --depth                              # mesh.bin bytes vs JPEG
     ibr bench viewer
 
 Both sites hold the same panorama: ``tiles`` (512-px base faces first, then the 512-px tiles a
-view needs, up to 4096-px faces) and ``whole`` (six 4096-px faces, what the page loaded before
+view needs, up to the panorama's own resolution: 8192-px faces, whose level is drawn as quads
+beyond the 4096-px cube textures) and ``whole`` (six 4096-px faces, what the page loaded before
 tiles). Time to first picture: page navigation until the page says it is ready (all its faces
 decoded and uploaded, first frame drawn). Frame time: the median of 20 view changes (yaw + 1
 degree, draw, read back one pixel so the frame is finished) at a 30 degree field of view, where the tiled site also fetches tiles.
@@ -49,7 +51,7 @@ def panorama(width: int) -> np.ndarray:
     return out
 
 
-def measure(site: Path, label: str, rows) -> None:
+def measure(site: Path, label: str, rows, fov: float = 30.0) -> None:
     from browser import DevTools
     from panorama.viewer import serve, site_url
 
@@ -60,7 +62,7 @@ def measure(site: Path, label: str, rows) -> None:
         dt.call("Page.enable")
         dt.call("Emulation.setDeviceMetricsOverride", width=W, height=H, deviceScaleFactor=1, mobile=False)
         t0 = time.perf_counter()
-        dt.call("Page.navigate", url=site_url(server, hud=False, fov_deg=30.0))
+        dt.call("Page.navigate", url=site_url(server, hud=False, fov_deg=fov))
         dt.wait_for("document.title.includes('ready')", timeout=600)
         first = time.perf_counter() - t0
         ms = dt.eval("""(() => { const t = [], px = new Uint8Array(4);
@@ -76,14 +78,46 @@ def measure(site: Path, label: str, rows) -> None:
         server.shutdown()
         server.server_close()
         shutil.rmtree(profile, ignore_errors=True)
-    rows.append((label, f"{first:.2f} s", f"{ms:.1f} ms", f"{fetched} images, {mb:.1f} MB"))
+    rows.append((label, f"{fov:g}", f"{first:.2f} s", f"{ms:.1f} ms", f"{fetched} images, {mb:.1f} MB"))
+
+
+def depth_bytes(widths=(1024, 2048, 4096)) -> None:
+    """Bytes of a depth site's meshes (mesh.bin) against the panorama's JPEG (quality 90): the
+    capture scene rendered at each width, faces of the site's default size."""
+    import cv2
+
+    from ibr.synth.scenes import make_scene
+    from panorama.face_meshes import face_meshes, pack_face_meshes
+    from panorama.synth import render_equirect
+    from panorama.viewer import _pow2_face_size
+
+    rows = []
+    for w in widths:
+        color, rng = render_equirect(make_scene("capture"), w, w // 2)
+        color = np.rint(np.clip(color, 0, 1) * 255).astype(np.uint8)
+        jpeg = cv2.imencode(".jpg", color[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, 90])[1]
+        size = _pow2_face_size(w, 8, 2048)
+        t = time.perf_counter()
+        meshes = face_meshes(color, rng, face_size=size, head_box=0.1)
+        t = time.perf_counter() - t
+        quads, data = sum(map(len, meshes)), pack_face_meshes(meshes)
+        rows.append((f"{w}x{w // 2}", f"{size}", f"{quads} ({quads / (6 * size * size) * 100:.2f} % of px)",
+                     f"{len(data) / 1e3:.1f} kB", f"{len(jpeg) / 1e3:.1f} kB", f"{len(data) / len(jpeg):.2f}", f"{t:.1f} s"))
+    report(rows, ("capture scene", "faces", "quads", "mesh.bin", "JPEG q90", "ratio", "meshing"),
+           RESULTS / "viewer_depth.txt")
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="a 4096 x 2048 panorama instead of 16384 x 8192")
+    p.add_argument("--depth", action="store_true",
+                   help="only the depth sites' mesh bytes against the panorama's JPEG (no browser)")
     args = p.parse_args(argv)
+    if args.depth:
+        depth_bytes()
+        return 0
     from browser import chromium
+    from ibr.io.view_files import read_json
     from panorama.viewer import write_site
 
     if chromium() is None:
@@ -104,11 +138,14 @@ def main(argv=None) -> int:
         t_whole = time.perf_counter() - t
         print(f"panorama {width}x{width // 2} built in {t - t0 - t_tiles:.1f} s; sites written: tiles "
               f"{t_tiles:.1f} s ({len(os.listdir(tiles))} files), whole faces {t_whole:.1f} s")
-        measure(tiles, f"tiles (512-px base, then tiles up to {face}-px faces)", rows)
+        top = read_json(tiles / "viewer.json", "viewer.json")["tiles"]["levels"][-1]
+        measure(tiles, f"tiles (512-px base, then tiles up to {top}-px faces)", rows)
         measure(whole, f"whole faces ({face} px, loaded at once)", rows)
-    print(f"\n{width}x{width // 2} panorama, {W}x{H} page, fov 30, headless Chromium (SwiftShader), "
+        if top > 4096:  # zoomed in far enough for the level finer than any cube texture: quad tiles
+            measure(tiles, f"tiles, the {top}-px level drawn as quads", rows, fov=10.0)
+    print(f"\n{width}x{width // 2} panorama, {W}x{H} page, headless Chromium (SwiftShader), "
           f"load {os.getloadavg()[0]:.2f}")
-    report(rows, ("site", "first picture", "frame", "fetched"), RESULTS / "viewer.txt")
+    report(rows, ("site", "fov", "first picture", "frame", "fetched"), RESULTS / "viewer.txt")
     return 0
 
 
