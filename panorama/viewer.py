@@ -30,6 +30,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ibr.base.validate import MAX_IMAGE_SIDE
+
 from .convert import equirect_to_cubemap, perspective
 from .directions import FACE_FILE_NAMES
 from ibr.io import write_image
@@ -46,6 +48,8 @@ SITE_FILES = (("index.html", "viewer.json", "mesh.bin") + tuple(f"{n}.png" for n
 #: Largest cube face the site writes: 4096 px is the safe WebGL cube-map size on phones (the page
 #: also checks its own device's MAX_CUBE_MAP_TEXTURE_SIZE and says so instead of a black page).
 MAX_FACE_SIZE = 4096
+#: (yaw, pitch) of each face (px nx py ny pz nz) as a 90-degree perspective view: the same rays
+FACE_VIEWS = ((90.0, 0.0), (-90.0, 0.0), (0.0, -90.0), (0.0, 90.0), (0.0, 0.0), (180.0, 0.0))
 #: Largest face of a tile pyramid: levels finer than a device's cube limit are drawn as their
 #: tiles (textured quads), so a 16384-wide panorama keeps its own resolution (faces of 8192 px).
 MAX_TILED_FACE_SIZE = 8192
@@ -214,7 +218,9 @@ def _faces(pano, layout, face_size):
                                 and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
         if face_size is None:  # a power of two (mipmaps on WebGL1 too), >= width / pi, <= 2048
             face_size = _pow2_face_size(pano.shape[1], 8, 2048)
-        faces = equirect_to_cubemap(pano, face_size, layout="list")
+        faces = (equirect_to_cubemap(pano, face_size, layout="list") if 6 * face_size <= MAX_IMAGE_SIDE
+                 else [perspective(pano, yaw_deg=y, pitch_deg=p, fov_deg=90.0, width=face_size, height=face_size)
+                       for y, p in FACE_VIEWS])  # one face at a time: six 8192-px faces exceed one image
     else:
         from .convert import detect_layout
         faces = unpack_faces(pano, layout or detect_layout(pano))

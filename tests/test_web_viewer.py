@@ -199,3 +199,18 @@ def test_tiles_load_only_what_a_zoomed_view_needs(tmp_path, maxcube):
                              **zoom)
 
     assert _psnr(shot, view(2048)) > 35 and _psnr(view(512), view(2048)) < 30  # the tiles made the detail
+
+
+def test_faces_as_perspective_views_are_the_cube_faces():
+    """Faces too large for one cubemap image are made one at a time as 90-degree perspective
+    views (FACE_VIEWS): the same rays as equirect_to_cubemap, face by face and in order."""
+    from panorama.viewer import FACE_VIEWS
+
+    d = equirect_directions(512, 256)
+    lon = np.arctan2(d[..., 0], d[..., 2])
+    eq = np.stack([0.5 + 0.4 * np.sin(5 * lon + 3 * d[..., 1]), 0.5 + 0.4 * d[..., 1], 0.5 + 0.3 * np.cos(3 * lon)],
+                  -1).astype(np.float32)
+    faces = P.equirect_to_cubemap(eq, 128, layout="list")
+    for face, (yaw, pitch) in zip(faces, FACE_VIEWS, strict=True):
+        view = P.perspective(eq, yaw_deg=yaw, pitch_deg=pitch, fov_deg=90.0, width=128, height=128)
+        np.testing.assert_allclose(view, face, atol=1e-5)
