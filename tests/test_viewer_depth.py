@@ -140,3 +140,33 @@ def test_side_by_side_from_depth_with_lens_predistortion(tmp_path, capture):
         got = bent[:, k * half:(k + 1) * half]
         diff = np.abs(got - want.astype(np.int16)).max(-1)
         assert np.median(diff) <= 1 and np.percentile(diff, 99) <= 3  # measured: 99th percentile 1/255
+
+
+@pytest.mark.skipif(chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
+def test_a_damaged_or_missing_mesh_file_is_named_in_the_page(tmp_path):
+    """A truncated or missing mesh.bin is said in the page's HUD, never a blank page."""
+    import tempfile
+
+    from browser import DevTools
+
+    d = equirect_directions(256, 128)
+    rng = (2.0 / np.abs(d).max(-1)).astype(np.float32)
+    site = tmp_path / "site"
+    write_site(site, np.full((128, 256, 3), 0.5, np.float32), depth=rng)
+    data = (site / "mesh.bin").read_bytes()
+    server = serve(site)
+    dt = DevTools.start(W, H, tempfile.mkdtemp(prefix="ibr-chromium-", dir=tmp_path))
+    try:
+        dt.call("Page.enable")
+        for damage, message in ((data[:-4], "depth mesh: truncated mesh file"), (None, "depth mesh: cannot load mesh.bin (404)")):
+            if damage is None:
+                (site / "mesh.bin").unlink()
+            else:
+                (site / "mesh.bin").write_bytes(damage)
+            dt.call("Page.navigate", url=site_url(server))
+            dt.wait_for(f"(document.getElementById('hud') || {{}}).textContent === {message!r}", timeout=30)
+            assert dt.eval("getComputedStyle(document.getElementById('hud')).display") == "block"
+    finally:
+        dt.close()
+        server.shutdown()
+        server.server_close()
