@@ -129,8 +129,8 @@ def _lerp1(src, x0, x1, y0, y1, ax, ay):
     return top + ay * (bot - top)
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
-def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
+@njit(cache=True, error_model="numpy", nogil=True)
+def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
                       out, depth, coverage, use_trust, ka, kb):
     """Fused bilinear sampling + two-layer composite (see composite2): layer colors are sampled
     (in float32) from the sources sa, sb (any dtype: uint8 sources are read as is, 4x less memory
@@ -138,9 +138,10 @@ def sample_composite2(sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel
     no layer color image is ever written. ``single``: only layer a exists. ``use_trust``: the
     agreeing blend weights are scaled by the source-space trust maps ka, kb ((H_s, W_s, 2):
     trust and its 2x2 block minimum, see ``composite.pack_trust``), sampled with the same
-    bilinear taps where a block holds a mixed pixel."""
-    h, w, nc = out.shape
-    for v in prange(h):
+    bilinear taps where a block holds a mixed pixel. Rows ``v0 .. v1-1`` only (serial, without
+    the GIL: :func:`ibr.render.bands.run_bands` runs row bands on all cores)."""
+    w, nc = out.shape[1], out.shape[2]
+    for v in range(v0, v1):
         for u in range(w):
             a = za[v, u]
             has_a = a > 0.0

@@ -37,7 +37,7 @@ __all__: list[str] = []
 _G, _HX, _HY, _HZ = 0, 3, 6, 9
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _corner_tgt(uc, vc, a, b, c, ifx, ify, cx, cy, r, t):
     """Target-frame point of the source pixel-edge corner (uc, vc) on the plane 1/z = a u + b v + c
     (ifx, ify: reciprocal source focal lengths)."""
@@ -55,7 +55,7 @@ def _corner_tgt(uc, vc, a, b, c, ifx, ify, cx, cy, r, t):
     return x, y, z, True
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _grow(x, y, z, kt, lim, umin, umax, vmin, vmax):
     iz = 1.0 / z
     uu = min(max(kt[0] * x * iz + kt[2], -lim), lim)
@@ -63,7 +63,7 @@ def _grow(x, y, z, kt, lim, umin, umax, vmin, vmax):
     return min(umin, uu), max(umax, uu), min(vmin, vv), max(vmax, vv)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _clip_edge(xa, ya, za, xb, yb, zb, eps, kt, lim, umin, umax, vmin, vmax):
     """Grow the projected bounding box by edge a->b clipped to z > eps (Sutherland-Hodgman:
     the start vertex if in front, plus the crossing point with z = eps)."""
@@ -205,7 +205,7 @@ def bucket_bands(bbox, height, nbands):
     return count, quads
 
 
-def _raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quads, far_coord,
+def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_start, band_quads, far_coord,
                   depth, map_u, map_v, coverage):
     """Z-buffered rasterization of quads into source-coordinate maps, one band of target rows
     per parallel task (each band owns its rows: no write races).
@@ -219,7 +219,7 @@ def _raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quad
     """
     nbands = band_start.shape[0] - 1
     rows_per_band = (height + nbands - 1) // nbands
-    for band in prange(nbands):
+    for band in range(band0, band1):
         r0 = band * rows_per_band
         r1 = min(height, r0 + rows_per_band)
         inv_z = depth
@@ -305,8 +305,9 @@ def _raster_quads(rects, coef, bbox, clamp, width, height, band_start, band_quad
                     map_v[v, u] = far_coord
 
 
-raster_quads = njit(cache=True, error_model="numpy", parallel=True)(_raster_quads)
-raster_quads_serial = njit(cache=True, error_model="numpy")(_raster_quads)
+#: Bands ``band0 .. band1-1`` without the GIL: :func:`ibr.render.bands.run_bands` runs bands on all
+#: cores (compiled serially: a third of the parallel=True compile time, #13)
+raster_quads = njit(cache=True, error_model="numpy", nogil=True)(_raster_quads)
 
 
 @njit(cache=True, error_model="numpy")

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _composite_kernels as _k
+from .bands import run_bands
 from ..base.validate import check_choice, check_positive
 from ..base.camera import Camera
 from .rasterize import Layer
@@ -281,7 +282,7 @@ def sample_composite(
             raise ValueError("trust: expected one (H_s, W_s) array per source, of the source's size")
         k = [t if t.ndim == 3 and t.shape[2] == 2 else pack_trust(t) for t in k]
         ka, kb = k[a], k[b]
-    _k.sample_composite2(sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u, mb.map_v, mb.depth,
-                         single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage,
-                         use_trust, ka, kb)
+    run_bands(_k.sample_composite2, out.shape[0], sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u,
+              mb.map_v, mb.depth, single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage,
+              use_trust, ka, kb)
     return Composite(out, depth, coverage)

@@ -29,6 +29,7 @@ import cv2
 import numpy as np
 
 from . import _raster_kernels as _k
+from .bands import run_bands
 from ..base.validate import check_choice, check_image, check_positive
 from ..base.camera import Camera
 
@@ -201,8 +202,8 @@ def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out:
     setup(mesh.rects, mesh.inv_depth_planes, _intrinsics(src), r, t, kt_inv, kt, w, h, coef, bbox)
     flags = _clamp_flags(mesh, footprint, depth_tol)
     start, order = _k.bucket_bands(bbox, h, _nbands(h))
-    raster = _k.raster_quads if h * w >= _PARALLEL_PIXELS else _k.raster_quads_serial
-    raster(mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, out.depth, out.map_u, out.map_v, out.coverage)
+    run_bands(_k.raster_quads, len(start) - 1, mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, out.depth,
+              out.map_u, out.map_v, out.coverage, min_rows=1 if h * w >= _PARALLEL_PIXELS else len(start))
     return out
 
 
