@@ -259,3 +259,21 @@ def test_level_of_detail_comes_from_the_camera_move():
     assert len(fine) >= len(source_mesh(v))  # a bigger move needs at least as many quads
     err_px = np.abs(1 / fine.depth() - 1 / z).max() * F * big
     assert err_px <= 0.5 + 1e-6
+
+
+def test_mixed_pixels_in_strips_equal_the_whole_image(monkeypatch):
+    """mixed_pixels works in strips of rows (columns) to bound its memory: any strip size gives
+    the marks of the whole image at once (steps, NaN borders, one-pixel objects)."""
+    import ibr.render.composite as C
+
+    rng = np.random.default_rng(3)
+    z = rng.uniform(1, 5, (70, 90)).astype(np.float32)
+    z[:, 45:] *= 3
+    z[rng.random(z.shape) < 0.05] = np.nan
+    z[:, 20] = 0.5  # a one-pixel pole
+    monkeypatch.setattr(C, "_STRIP_PIXELS", 1 << 40)
+    whole = C.mixed_pixels(z)
+    assert 0.05 < whole.mean() < 0.9
+    for strip in (1, 90, 200, 1000):
+        monkeypatch.setattr(C, "_STRIP_PIXELS", strip)
+        np.testing.assert_array_equal(C.mixed_pixels(z), whole)
