@@ -277,3 +277,24 @@ def test_mixed_pixels_in_strips_equal_the_whole_image(monkeypatch):
     for strip in (1, 90, 200, 1000):
         monkeypatch.setattr(C, "_STRIP_PIXELS", strip)
         np.testing.assert_array_equal(C.mixed_pixels(z), whole)
+
+
+def test_background_rim_beside_a_disocclusion_becomes_a_hole():
+    """A pixel that only one source covers, sampled from that source's background rim (its
+    colour mixes in the foreground beside it), is dropped where the target shows a hole next
+    to it (a disocclusion) and kept where it is not beside a hole (at the source's own pose)."""
+    from ibr.render.composite import drop_rim
+
+    z = np.full((5, 8), 4.0, np.float32)
+    z[:, 4:] = 1.0  # foreground on the right: column 3 is the background rim
+    rim = mixed_pixels(z, side="far")
+    assert rim[:, 3].all() and rim.sum() == 5  # the farther side only
+    assert mixed_pixels(z)[:, 3:5].all() and mixed_pixels(z).sum() == 10  # both sides
+    color = np.full((5, 8, 3), 100, np.uint8)
+    depth = z.copy()
+    coverage = np.ones((5, 8), bool)
+    coverage[:2, 2] = False  # a disocclusion beside the rim in rows 0-1 only
+    depth[~coverage] = np.nan
+    assert drop_rim(color, depth, coverage, rim) == 2
+    assert not coverage[:2, 3].any() and coverage[2:, 3].all() and np.isnan(depth[:2, 3]).all()
+    assert (color[:2, 3] == 0).all() and (color[2:, 3] == 100).all()

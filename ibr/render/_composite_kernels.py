@@ -129,20 +129,31 @@ def _lerp1(src, x0, x1, y0, y1, ax, ay):
     return top + ay * (bot - top)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _on_rim(k, x, y):
+    """Whether the nearest source pixel of the sample at (x, y) is on the background rim
+    (channel 2 of a packed trust map)."""
+    x0, x1, y0, y1, ax, ay = _taps(k, x, y)
+    return k[y1 if ay >= 0.5 else y0, x1 if ax >= 0.5 else x0, 2] > 0.5
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
-                      out, depth, coverage, use_trust, ka, kb):
+                      out, depth, coverage, use_trust, ka, kb, rim):
     """Fused bilinear sampling + two-layer composite (see composite2): layer colors are sampled
     (in float32) from the sources sa, sb (any dtype: uint8 sources are read as is, 4x less memory
     traffic than a float32 copy, with identical results) at the maps (ua, va), (ub, vb) only where they are used, so
     no layer color image is ever written. ``single``: only layer a exists. ``use_trust``: the
     agreeing blend weights are scaled by the source-space trust maps ka, kb ((H_s, W_s, 2):
-    trust and its 2x2 block minimum, see ``composite.pack_trust``), sampled with the same
-    bilinear taps where a block holds a mixed pixel. Rows ``v0 .. v1-1`` only (serial, without
+    trust, its 2x2 block minimum and the background rim, see ``composite.pack_trust``), sampled
+    with the same bilinear taps where a block holds a mixed pixel. ``rim`` (H, W) bool receives,
+    where only one layer covers a pixel, whether its nearest source pixel is on that source's
+    background rim (``composite.drop_rim`` then drops those next to a hole). Rows ``v0 .. v1-1`` only (serial, without
     the GIL: :func:`ibr.render.bands.run_bands` runs row bands on all cores)."""
     w, nc = out.shape[1], out.shape[2]
     for v in range(v0, v1):
         for u in range(w):
+            rim[v, u] = False
             a = za[v, u]
             has_a = a > 0.0
             b = np.float32(np.nan)
@@ -173,10 +184,12 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
                 _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = a
                 coverage[v, u] = True
+                rim[v, u] = use_trust and _on_rim(ka, ua[v, u], va[v, u])
             elif has_b:
                 _sample_store(sb, ub[v, u], vb[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = b
                 coverage[v, u] = True
+                rim[v, u] = use_trust and _on_rim(kb, ub[v, u], vb[v, u])
             else:
                 for ch in range(nc):
                     out[v, u, ch] = 0

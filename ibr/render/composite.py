@@ -23,7 +23,7 @@ from ..base.validate import check_choice, check_positive
 from ..base.camera import Camera
 from .rasterize import Layer
 
-__all__ = ["COMPOSITE_MODES", "Composite", "composite", "mixed_pixels", "pack_trust", "sample_composite",
+__all__ = ["COMPOSITE_MODES", "Composite", "composite", "drop_rim", "mixed_pixels", "pack_trust", "sample_composite",
            "source_trust", "viewpoint_weights"]
 
 #: Relative step in inverse depth between 4-neighbours that marks a depth discontinuity (and
@@ -33,7 +33,7 @@ STEP_RATIO = 3.0
 #: Trust of a mixed silhouette pixel in the blend (clean pixels: 1).
 MIXED_TRUST = 0.03
 
-_NO_TRUST = np.ones((1, 1, 2), np.float32)
+_NO_TRUST = np.array([[[1, 1, 0]]], np.float32)
 _NO_TRUST_2D = np.ones((1, 1), np.float32)
 
 #: Compositing modes: depth-aware blend (default) and the seed's front/back order.
@@ -76,14 +76,18 @@ def _steps(q: np.ndarray, axis: int, rel: float, ratio: float) -> np.ndarray:
     return step | (np.isnan(q0) != np.isnan(q1))
 
 
-def mixed_pixels(depth, *, rel: float = STEP_REL, ratio: float = STEP_RATIO) -> np.ndarray:
+def mixed_pixels(depth, *, rel: float = STEP_REL, ratio: float = STEP_RATIO, side: str = "both") -> np.ndarray:
     """(H, W) bool: pixels on either side of a depth discontinuity of a source (silhouettes).
 
     A camera integrates each pixel over its area, so a pixel whose 4-neighbour lies across a
     depth step (see :data:`STEP_REL`, :data:`STEP_RATIO`; the edge of valid depth counts)
     holds a mixture of foreground and background colour while its depth is one of the two. Such
-    pixels are marked on *both* sides of the step. Invalid pixels are never marked.
+    pixels are marked on *both* sides of the step (``side="both"``), or only the farther pixel
+    of each step between two valid depths (``side="far"``: the background rim, whose colour
+    carries the foreground's). Invalid pixels are never marked.
     """
+    if side not in ("both", "far"):
+        raise ValueError(f"side: expected 'both' or 'far', got {side!r}")
     z = np.asarray(depth, np.float64)
     if z.ndim != 2:
         raise ValueError(f"depth: expected (H, W), got shape {z.shape}")
@@ -95,15 +99,27 @@ def mixed_pixels(depth, *, rel: float = STEP_REL, ratio: float = STEP_RATIO) -> 
     # rows (columns) keep numpy's temporaries small (a 1080p frame peaked 130 MB higher, #13)
     rows = max(1, _STRIP_PIXELS // max(w, 1))
     for r0 in range(0, h, rows) if w > 1 else ():
-        hs = _steps(q[r0:r0 + rows], 1, rel, ratio)
-        out[r0:r0 + rows, :-1] |= hs
-        out[r0:r0 + rows, 1:] |= hs
+        _mark(out[r0:r0 + rows], q[r0:r0 + rows], 1, rel, ratio, side)
     cols = max(1, _STRIP_PIXELS // max(h, 1))
     for c0 in range(0, w, cols) if h > 1 else ():
-        vs = _steps(q[:, c0:c0 + cols], 0, rel, ratio)
-        out[:-1, c0:c0 + cols] |= vs
-        out[1:, c0:c0 + cols] |= vs
+        _mark(out[:, c0:c0 + cols], q[:, c0:c0 + cols], 0, rel, ratio, side)
     return out & ~np.isnan(q)
+
+
+def _mark(out: np.ndarray, q: np.ndarray, axis: int, rel: float, ratio: float, side: str) -> None:
+    """Mark in ``out`` the pixels of the steps of ``q`` along ``axis`` (see mixed_pixels)."""
+    step = _steps(q, axis, rel, ratio)
+    first = (slice(None, -1), slice(None)) if axis == 0 else (slice(None), slice(None, -1))
+    second = (slice(1, None), slice(None)) if axis == 0 else (slice(None), slice(1, None))
+    if side == "both":
+        out[first] |= step
+        out[second] |= step
+        return
+    with np.errstate(invalid="ignore"):
+        first_far = q[first] < q[second]  # smaller inverse depth: the farther pixel (NaN: False)
+        second_far = q[second] < q[first]
+    out[first] |= step & first_far
+    out[second] |= step & second_far
 
 
 def source_trust(depth, *, mixed_trust: float = MIXED_TRUST) -> np.ndarray:
@@ -116,15 +132,43 @@ def source_trust(depth, *, mixed_trust: float = MIXED_TRUST) -> np.ndarray:
     return t
 
 
-def pack_trust(trust) -> np.ndarray:
-    """(H, W, 2) float32: the trust map and, per pixel, the minimum over the 2x2 block that
-    starts there (the taps of a bilinear sample whose floor is that pixel; clamped at the
-    border), so the sampler skips the interpolation where all four taps are clean."""
+def pack_trust(trust, rim=None) -> np.ndarray:
+    """(H, W, 3) float32: the trust map; per pixel, the minimum over the 2x2 block that starts
+    there (the taps of a bilinear sample whose floor is that pixel; clamped at the border), so
+    the sampler skips the interpolation where all four taps are clean; and 1 on the background
+    rim ``rim`` (:func:`mixed_pixels` with ``side="far"``; default none), whose samples the
+    compositor drops where no other source covers the pixel (the hole fill takes over)."""
     t = np.ascontiguousarray(trust, np.float32)
     m = t.copy()
     m[:, :-1] = np.minimum(m[:, :-1], t[:, 1:])
     m[:-1] = np.minimum(m[:-1], m[1:])
-    return np.ascontiguousarray(np.stack([t, m], -1))
+    r = np.zeros_like(t) if rim is None else np.asarray(rim, np.float32)
+    return np.ascontiguousarray(np.stack([t, m, r], -1))
+
+
+def drop_rim(color, depth, coverage, rim) -> int:
+    """Turn into holes (in place) the pixels of ``rim`` beside a hole; return how many.
+
+    ``rim`` marks pixels that only one source covers with a sample from its background rim
+    (:func:`mixed_pixels` with ``side="far"``): its colour mixes in the foreground beside it in
+    that source. Where the target still shows that foreground next to it (no hole beside the
+    pixel, e.g. at the source's own pose) the mixture is right and stays; beside a hole (a
+    disocclusion opened between the two surfaces) it would be a dark or bright outline left on
+    the background, so the hole fill takes the pixel over.
+    """
+    if not rim.any():
+        return 0
+    holes = ~coverage
+    near_hole = np.zeros_like(holes)
+    near_hole[1:] |= holes[:-1]
+    near_hole[:-1] |= holes[1:]
+    near_hole[:, 1:] |= holes[:, :-1]
+    near_hole[:, :-1] |= holes[:, 1:]
+    drop = rim & near_hole
+    color[drop] = 0
+    depth[drop] = np.nan
+    coverage[drop] = False
+    return int(drop.sum())
 
 
 def viewpoint_weights(camera: Camera, sources) -> np.ndarray:
@@ -289,9 +333,12 @@ def sample_composite(
         k = [np.asarray(t, np.float32) for t in trust]
         if len(k) != 2 or any(t.shape[:2] != s.shape[:2] for t, s in zip(k, sources)):
             raise ValueError("trust: expected one (H_s, W_s) array per source, of the source's size")
-        k = [t if t.ndim == 3 and t.shape[2] == 2 else pack_trust(t) for t in k]
+        k = [t if t.ndim == 3 and t.shape[2] == 3 else pack_trust(t) for t in k]
         ka, kb = k[a], k[b]
+    rim = np.empty(depth.shape, np.bool_)
     run_bands(_k.sample_composite2, out.shape[0], sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u,
               mb.map_v, mb.depth, single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage,
-              use_trust, ka, kb)
+              use_trust, ka, kb, rim)
+    if use_trust:
+        drop_rim(out, depth, coverage, rim)
     return Composite(out, depth, coverage)

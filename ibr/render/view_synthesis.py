@@ -23,7 +23,8 @@ import numpy as np
 
 from ..base.validate import check_choice, check_finite_scalar, check_positive
 from ..base.camera import Camera, interpolate_cameras
-from .composite import COMPOSITE_MODES, composite, pack_trust, sample_composite, source_trust, viewpoint_weights
+from .composite import (COMPOSITE_MODES, composite, mixed_pixels, pack_trust, sample_composite, source_trust,
+                        viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_pullpush_inplace, parallax_axis
 from .rasterize import FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_into, as_float_color, sample_maps, scratch, scratch_maps
 from ..base.view import View
@@ -102,13 +103,13 @@ class _Source:
         self.median_depth = None
 
     def trust(self, mesh_key) -> np.ndarray:
-        """(H, W, 2) float32 :func:`~ibr.render.composite.source_trust` of the source (mixed
-        silhouette pixels low) with its 2x2 block minimum (``pack_trust``), from the depth of its mesh for ``mesh_key`` (planes: quantized
+        """(H, W, 3) float32 :func:`~ibr.render.composite.source_trust` of the source (mixed
+        silhouette pixels low) with its 2x2 block minimum and background rim (``pack_trust``), from the depth of its mesh for ``mesh_key`` (planes: quantized
         depth codes are no steps) or, for ``None`` (forward splat), from the raw depth."""
         t = self._trust.get(mesh_key)
         if t is None:
             depth = self._depth if mesh_key is None else self.meshes[mesh_key].depth()
-            t = self._trust[mesh_key] = pack_trust(source_trust(depth))
+            t = self._trust[mesh_key] = pack_trust(source_trust(depth), mixed_pixels(depth, side="far"))
             t.setflags(write=False)
         return t
 
