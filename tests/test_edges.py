@@ -17,6 +17,8 @@ from ibr.render.composite import composite, mixed_pixels, source_trust
 from ibr.render.fill import fill_background_rows, fill_pullpush, parallax_axis
 from ibr.render.rasterize import Layer
 from ibr.render.view_synthesis import interpolate, lod_baseline, source_mesh, warp
+from ibr.io import load_view
+from samples import DATA_DIR
 
 F = 100.0
 
@@ -279,22 +281,39 @@ def test_mixed_pixels_in_strips_equal_the_whole_image(monkeypatch):
         np.testing.assert_array_equal(C.mixed_pixels(z), whole)
 
 
-def test_background_rim_beside_a_disocclusion_becomes_a_hole():
+def test_background_rim_beside_a_disocclusion_is_marked_for_the_fill():
     """A pixel that only one source covers, sampled from that source's background rim (its
-    colour mixes in the foreground beside it), is dropped where the target shows a hole next
-    to it (a disocclusion) and kept where it is not beside a hole (at the source's own pose)."""
-    from ibr.render.composite import drop_rim
+    colour mixes in the foreground beside it), is marked for the fill where the target shows a
+    hole next to it (a disocclusion) and not where no hole is beside it (the source's own pose)."""
+    from ibr.render.composite import rim_beside_holes
 
     z = np.full((5, 8), 4.0, np.float32)
     z[:, 4:] = 1.0  # foreground on the right: column 3 is the background rim
     rim = mixed_pixels(z, side="far")
     assert rim[:, 3].all() and rim.sum() == 5  # the farther side only
     assert mixed_pixels(z)[:, 3:5].all() and mixed_pixels(z).sum() == 10  # both sides
-    color = np.full((5, 8, 3), 100, np.uint8)
-    depth = z.copy()
     coverage = np.ones((5, 8), bool)
     coverage[:2, 2] = False  # a disocclusion beside the rim in rows 0-1 only
-    depth[~coverage] = np.nan
-    assert drop_rim(color, depth, coverage, rim) == 2
-    assert not coverage[:2, 3].any() and coverage[2:, 3].all() and np.isnan(depth[:2, 3]).all()
-    assert (color[:2, 3] == 0).all() and (color[2:, 3] == 100).all()
+    replace = rim_beside_holes(coverage, rim)
+    assert replace[:2, 3].all() and replace.sum() == 2
+
+
+def test_ghost_outline_beside_a_disocclusion_is_gone_after_the_fill():
+    """Clutter t = 0.75: behind the pole a disocclusion opens on the face; the background rim of
+    the pole in the source (dark, pole colour mixed in) lay along it as a dark sliver. With
+    silhouette-aware sources that rim is recoloured by the fill (measured in the 20 x 40 box:
+    33.2 dB against 26.7 without; full frame 36.54 against 35.70), and the hole mask is unchanged."""
+    a, b = load_view(DATA_DIR / "clutter_a.json"), load_view(DATA_DIR / "clutter_b.json")
+    truth = load_view(DATA_DIR / "clutter_t075.json")
+    new = interpolate(a, b, truth.camera, fill="inpaint")
+    old = interpolate(a, b, truth.camera, fill="inpaint", silhouettes=False)
+    box = (slice(70, 110), slice(215, 235))
+
+    def psnr(x, y):
+        d = x.astype(np.float64) - y.astype(np.float64)
+        return 10 * np.log10(255.0**2 / np.mean(d * d))
+
+    assert psnr(new.color[box], truth.color[box]) > psnr(old.color[box], truth.color[box]) + 5
+    assert psnr(new.color, truth.color) > psnr(old.color, truth.color) + 0.5
+    np.testing.assert_array_equal(new.holes, old.holes)
+    assert 0 < (new.filled & ~new.holes).sum() < 0.01 * new.holes.size

@@ -95,10 +95,20 @@ def test_sequence_previous_fill_and_mesh_cache(room, monkeypatch):
     assert len(calls) == 2
     assert [f.t for f in frames] == [0.2, 0.4, 0.6]
     for prev, cur in zip(frames, frames[1:]):
-        np.testing.assert_array_equal(cur.filled, cur.holes)
+        np.testing.assert_array_equal(cur.filled & cur.holes, cur.holes)  # every hole from the previous frame
         np.testing.assert_array_equal(cur.color[cur.holes], prev.color[cur.holes])
+        # beyond the holes the fill recolours only background-rim pixels, each beside a hole
+        extra = cur.filled & ~cur.holes
+        beside = np.zeros_like(extra)
+        beside[1:] |= cur.holes[:-1]
+        beside[:-1] |= cur.holes[1:]
+        beside[:, 1:] |= cur.holes[:, :-1]
+        beside[:, :-1] |= cur.holes[:, 1:]
+        assert not (extra & ~beside).any() and extra.mean() < 0.01
     none = interpolate(fresh_a, fresh_b, [0.2, 0.4], fill="none")
-    np.testing.assert_array_equal(none[1].color[~none[1].holes], frames[1].color[~frames[1].holes])
+    kept = ~frames[1].filled
+    np.testing.assert_array_equal(none[1].color[kept], frames[1].color[kept])
+    np.testing.assert_array_equal(none[1].holes, frames[1].holes)  # the hole mask is the same exact mask
     assert (none[1].color[none[1].holes] == 0).all() and not none[1].filled.any()
 
 

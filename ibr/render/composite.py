@@ -23,7 +23,7 @@ from ..base.validate import check_choice, check_positive
 from ..base.camera import Camera
 from .rasterize import Layer
 
-__all__ = ["COMPOSITE_MODES", "Composite", "composite", "drop_rim", "mixed_pixels", "pack_trust", "sample_composite",
+__all__ = ["COMPOSITE_MODES", "Composite", "composite", "mixed_pixels", "pack_trust", "rim_beside_holes", "sample_composite",
            "source_trust", "viewpoint_weights"]
 
 #: Relative step in inverse depth between 4-neighbours that marks a depth discontinuity (and
@@ -43,11 +43,14 @@ COMPOSITE_MODES = ("blend", "front")
 @dataclass(frozen=True, eq=False)
 class Composite:
     """Result of :func:`composite`: ``color`` (H, W, C) in the requested dtype, ``depth`` (H, W)
-    float32 planar z (NaN where no layer covers), ``coverage`` (H, W) bool."""
+    float32 planar z (NaN where no layer covers), ``coverage`` (H, W) bool; ``replace`` (H, W)
+    bool or None: covered pixels whose colour a hole fill should replace (background-rim samples
+    beside a hole, :func:`rim_beside_holes`)."""
 
     color: np.ndarray
     depth: np.ndarray
     coverage: np.ndarray
+    replace: np.ndarray | None = None
 
 
 #: Pixels per strip in :func:`mixed_pixels` (bounds its temporary arrays to a few MB)
@@ -146,29 +149,23 @@ def pack_trust(trust, rim=None) -> np.ndarray:
     return np.ascontiguousarray(np.stack([t, m, r], -1))
 
 
-def drop_rim(color, depth, coverage, rim) -> int:
-    """Turn into holes (in place) the pixels of ``rim`` beside a hole; return how many.
+def rim_beside_holes(coverage, rim) -> np.ndarray:
+    """(H, W) bool: the pixels of ``rim`` that have an uncovered 4-neighbour.
 
     ``rim`` marks pixels that only one source covers with a sample from its background rim
     (:func:`mixed_pixels` with ``side="far"``): its colour mixes in the foreground beside it in
     that source. Where the target still shows that foreground next to it (no hole beside the
-    pixel, e.g. at the source's own pose) the mixture is right and stays; beside a hole (a
-    disocclusion opened between the two surfaces) it would be a dark or bright outline left on
-    the background, so the hole fill takes the pixel over.
+    pixel, e.g. at the source's own pose) the mixture is right; beside a hole (a disocclusion
+    opened between the two surfaces) it is a dark or bright outline left on the background, and
+    the hole fill should replace its colour (:attr:`Composite.replace`).
     """
-    if not rim.any():
-        return 0
     holes = ~coverage
     near_hole = np.zeros_like(holes)
     near_hole[1:] |= holes[:-1]
     near_hole[:-1] |= holes[1:]
     near_hole[:, 1:] |= holes[:, :-1]
     near_hole[:, :-1] |= holes[:, 1:]
-    drop = rim & near_hole
-    color[drop] = 0
-    depth[drop] = np.nan
-    coverage[drop] = False
-    return int(drop.sum())
+    return rim & near_hole
 
 
 def viewpoint_weights(camera: Camera, sources) -> np.ndarray:
@@ -339,6 +336,4 @@ def sample_composite(
     run_bands(_k.sample_composite2, out.shape[0], sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u,
               mb.map_v, mb.depth, single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage,
               use_trust, ka, kb, rim)
-    if use_trust:
-        drop_rim(out, depth, coverage, rim)
-    return Composite(out, depth, coverage)
+    return Composite(out, depth, coverage, rim_beside_holes(coverage, rim) if use_trust else None)

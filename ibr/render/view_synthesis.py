@@ -254,15 +254,23 @@ def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
     holes = ~comp.coverage
     color, depth = comp.color, comp.depth
     filled = np.zeros_like(holes)
-    if holes.any():
+    # background-rim samples beside a hole: covered (the hole mask stays exact), but their colour
+    # (foreground mixed in) is replaced by the fill's background estimate; their depth stays
+    replace = comp.replace if comp.replace is not None and fill != "none" and comp.replace.any() else None
+    rim_depth = depth[replace] if replace is not None else None
+    if holes.any() or replace is not None:
         if fill == "previous" and previous is not None:  # seed step 7; only hole pixels change
             color[holes] = previous.color.reshape(color.shape)[holes]
             depth[holes] = previous.depth[holes]
             filled = holes.copy()
+            if replace is not None:  # not from the previous frame: it holds other content there
+                filled |= _fill_pullpush_inplace(color, depth, replace, axis=axis)
         elif fill in ("previous", "inpaint"):  # streak-free background pull-push
-            filled = _fill_pullpush_inplace(color, depth, holes, axis=axis)
+            filled = _fill_pullpush_inplace(color, depth, holes if replace is None else holes | replace, axis=axis)
         elif fill == "background":  # the directional fill of issue 4 (rows and columns)
-            filled = _fill_background_inplace(color, depth, holes)
+            filled = _fill_background_inplace(color, depth, holes if replace is None else holes | replace)
+    if replace is not None:
+        depth[replace] = rim_depth
     if out_2d:
         color = color[..., 0]
     return Rendering(color, depth, holes, filled, camera, t)
