@@ -363,7 +363,7 @@ def test_site_with_force_replaces_only_viewer_files_and_serves_only_them(base, t
     from panorama.viewer import SITE_FILES
 
     names = {p.name for p in site.iterdir()} - {"canvas.js"}  # canvas.js: the canvas UI of #14
-    assert names == {"secret.txt", *(n for n in SITE_FILES if not n.endswith("_r.png"))}  # mono: no right eye
+    assert names == {"secret.txt", *(n for n in SITE_FILES if not n.endswith("_r.png") and n != "mesh.bin")}  # mono, no depth
 
 
 # --------------------------------------------------------------------------- ibr bench without matplotlib
