@@ -122,20 +122,29 @@ class terminate_as_interrupt:
         return False
 
 
-def note_first_run(*modules: str) -> None:
+def note_first_run(*modules: str) -> bool:
     """Say before a long first run that numba is compiling (once): when none of ``modules``
-    (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet."""
+    (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet; then
+    also start compiling the rasterizer and the hole fill in a second process
+    (:mod:`ibr.render.warmup`). Returns whether this is such a first run."""
     import importlib.util
     import os
 
-    if os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("NUMBA_DISABLE_JIT"):
-        return  # cache elsewhere, or no compilation: nothing to say
+    if os.environ.get("NUMBA_DISABLE_JIT"):
+        return False  # no compilation: nothing to say
+    cache_dir = os.environ.get("NUMBA_CACHE_DIR")
     for name in modules:
         spec = importlib.util.find_spec(name)
         if spec is None or spec.origin is None:
-            return
+            return False
         path = Path(spec.origin)
-        cache = path.parent / "__pycache__"
-        if cache.is_dir() and any(p.name.startswith(path.stem + ".") and p.suffix == ".nbi" for p in cache.iterdir()):
-            return
-    info("first run: compiling the numba kernels (15-25 s, once; later runs load them from the cache)")
+        # numba's index files: __pycache__ beside the module, or <folder>_<hash>/ under NUMBA_CACHE_DIR
+        caches = ([path.parent / "__pycache__"] if not cache_dir
+                  else list(Path(cache_dir).glob(f"{path.parent.name}_*")))
+        if any(c.is_dir() and any(c.glob(f"{path.stem}.*.nbi")) for c in caches):
+            return False
+    from ibr.render.warmup import start_warmup
+
+    start_warmup()
+    info("first run: compiling the numba kernels (5-10 s, once; later runs load them from the cache)")
+    return True

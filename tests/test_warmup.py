@@ -1,0 +1,40 @@
+"""The first-run helper (ibr.render.warmup): it compiles the rasterizer and the hole fill with
+the argument types of a real run, so the main process finds them in numba's cache."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
+    """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the rasterizer and the
+    fill kernels; a real interpolation afterwards compiles none of those (it loads them)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
+    subprocess.run([sys.executable, "-m", "ibr.render.warmup"], env=env, check=True, timeout=300)
+    cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
+    assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push"} <= cached
+    probe = (
+        "import sys\n"
+        "from numba.core import event\n"
+        "done = []\n"
+        "class L(event.Listener):\n"
+        "    def on_start(self, ev): pass\n"
+        "    def on_end(self, ev): done.append(ev.data['dispatcher'].py_func.__module__)\n"
+        "event.register('numba:compile', L())\n"
+        "from ibr.io import load_view\n"
+        "from ibr.render.view_synthesis import interpolate\n"
+        "from samples import DATA_DIR\n"
+        "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
+        "interpolate(a, b, 0.5, fill='inpaint')\n"
+        "print(sorted(set(done)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", probe], env=env, check=True, timeout=600, capture_output=True,
+                         text=True, cwd=ROOT).stdout
+    compiled = out.strip().splitlines()[-1]
+    assert "_raster_kernels" not in compiled and "_fill_kernels" not in compiled
+    assert "_segment_kernels" in compiled  # the main process still compiles what the helper does not
