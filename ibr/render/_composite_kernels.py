@@ -131,10 +131,10 @@ def _lerp1(src, x0, x1, y0, y1, ax, ay):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _on_rim(k, x, y):
-    """Whether the nearest source pixel of the sample at (x, y) is on the background rim
-    (channel 2 of a packed trust map)."""
+    """Whether the nearest source pixel of the sample at (x, y) is on the background rim (a
+    negative block minimum in channel 1 of a packed trust map, ``composite.pack_trust``)."""
     x0, x1, y0, y1, ax, ay = _taps(k, x, y)
-    return k[y1 if ay >= 0.5 else y0, x1 if ax >= 0.5 else x0, 2] > 0.5
+    return k[y1 if ay >= 0.5 else y0, x1 if ax >= 0.5 else x0, 1] < 0.0
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -145,7 +145,7 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
     traffic than a float32 copy, with identical results) at the maps (ua, va), (ub, vb) only where they are used, so
     no layer color image is ever written. ``single``: only layer a exists. ``use_trust``: the
     agreeing blend weights are scaled by the source-space trust maps ka, kb ((H_s, W_s, 2):
-    trust, its 2x2 block minimum and the background rim, see ``composite.pack_trust``), sampled
+    trust and its 2x2 block minimum, negative on the background rim, see ``composite.pack_trust``), sampled
     with the same bilinear taps where a block holds a mixed pixel. ``rim`` (H, W) bool receives,
     where only one layer covers a pixel, whether its nearest source pixel is on that source's
     background rim (``composite.drop_rim`` then drops those next to a hole). Rows ``v0 .. v1-1`` only (serial, without

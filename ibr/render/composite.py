@@ -33,7 +33,7 @@ STEP_RATIO = 3.0
 #: Trust of a mixed silhouette pixel in the blend (clean pixels: 1).
 MIXED_TRUST = 0.03
 
-_NO_TRUST = np.array([[[1, 1, 0]]], np.float32)
+_NO_TRUST = np.ones((1, 1, 2), np.float32)
 _NO_TRUST_2D = np.ones((1, 1), np.float32)
 
 #: Compositing modes: depth-aware blend (default) and the seed's front/back order.
@@ -136,17 +136,20 @@ def source_trust(depth, *, mixed_trust: float = MIXED_TRUST) -> np.ndarray:
 
 
 def pack_trust(trust, rim=None) -> np.ndarray:
-    """(H, W, 3) float32: the trust map; per pixel, the minimum over the 2x2 block that starts
-    there (the taps of a bilinear sample whose floor is that pixel; clamped at the border), so
-    the sampler skips the interpolation where all four taps are clean; and 1 on the background
-    rim ``rim`` (:func:`mixed_pixels` with ``side="far"``; default none), whose samples the
-    compositor drops where no other source covers the pixel (the hole fill takes over)."""
+    """(H, W, 2) float32: the trust map and, per pixel, the minimum over the 2x2 block that
+    starts there (the taps of a bilinear sample whose floor is that pixel; clamped at the
+    border), so the sampler skips the interpolation where all four taps are clean. On the
+    background rim ``rim`` (:func:`mixed_pixels` with ``side="far"``; default none) the block
+    minimum is stored as ``-1 - minimum`` (negative: the sampler reads the flag from its sign,
+    and ``< 1`` still sends it to the interpolation; one map less per source, #13)."""
     t = np.ascontiguousarray(trust, np.float32)
     m = t.copy()
     m[:, :-1] = np.minimum(m[:, :-1], t[:, 1:])
     m[:-1] = np.minimum(m[:-1], m[1:])
-    r = np.zeros_like(t) if rim is None else np.asarray(rim, np.float32)
-    return np.ascontiguousarray(np.stack([t, m, r], -1))
+    if rim is not None:
+        r = np.asarray(rim, bool)
+        m[r] = -1.0 - m[r]
+    return np.ascontiguousarray(np.stack([t, m], -1))
 
 
 def rim_beside_holes(coverage, rim) -> np.ndarray:
@@ -330,7 +333,7 @@ def sample_composite(
         k = [np.asarray(t, np.float32) for t in trust]
         if len(k) != 2 or any(t.shape[:2] != s.shape[:2] for t, s in zip(k, sources)):
             raise ValueError("trust: expected one (H_s, W_s) array per source, of the source's size")
-        k = [t if t.ndim == 3 and t.shape[2] == 3 else pack_trust(t) for t in k]
+        k = [t if t.ndim == 3 and t.shape[2] == 2 else pack_trust(t) for t in k]
         ka, kb = k[a], k[b]
     rim = np.empty(depth.shape, np.bool_)
     run_bands(_k.sample_composite2, out.shape[0], sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u,

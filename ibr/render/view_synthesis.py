@@ -103,8 +103,8 @@ class _Source:
         self.median_depth = None
 
     def trust(self, mesh_key) -> np.ndarray:
-        """(H, W, 3) float32 :func:`~ibr.render.composite.source_trust` of the source (mixed
-        silhouette pixels low) with its 2x2 block minimum and background rim (``pack_trust``), from the depth of its mesh for ``mesh_key`` (planes: quantized
+        """(H, W, 2) float32 :func:`~ibr.render.composite.source_trust` of the source (mixed
+        silhouette pixels low) with its 2x2 block minimum, negative on the background rim (``pack_trust``), from the depth of its mesh for ``mesh_key`` (planes: quantized
         depth codes are no steps) or, for ``None`` (forward splat), from the raw depth."""
         t = self._trust.get(mesh_key)
         if t is None:
