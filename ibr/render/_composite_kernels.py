@@ -137,6 +137,17 @@ def _on_rim(k, x, y):
     return k[y1 if ay >= 0.5 else y0, x1 if ax >= 0.5 else x0, 1] < 0.0
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _beside_hole(za, zb, v, u):
+    """Whether a 4-neighbour of target pixel (v, u) is covered by neither layer (a hole)."""
+    h, w = za.shape
+    for dv, du in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+        y, x = v + dv, u + du
+        if 0 <= y < h and 0 <= x < w and not (za[y, x] > 0.0) and not (zb[y, x] > 0.0):
+            return True
+    return False
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
                       out, depth, coverage, use_trust, ka, kb, rim):
@@ -148,7 +159,8 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
     trust and its 2x2 block minimum, negative on the background rim, see ``composite.pack_trust``), sampled
     with the same bilinear taps where a block holds a mixed pixel. ``rim`` (H, W) bool receives,
     where only one layer covers a pixel, whether its nearest source pixel is on that source's
-    background rim (``composite.drop_rim`` then drops those next to a hole). Rows ``v0 .. v1-1`` only (serial, without
+    background rim and a 4-neighbour is a hole (the rule of ``composite.rim_beside_holes``: the fill
+    recolours it; ``use_trust`` only, with two layers). Rows ``v0 .. v1-1`` only (serial, without
     the GIL: :func:`ibr.render.bands.run_bands` runs row bands on all cores)."""
     w, nc = out.shape[1], out.shape[2]
     for v in range(v0, v1):
@@ -184,12 +196,12 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
                 _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = a
                 coverage[v, u] = True
-                rim[v, u] = use_trust and _on_rim(ka, ua[v, u], va[v, u])
+                rim[v, u] = use_trust and _on_rim(ka, ua[v, u], va[v, u]) and _beside_hole(za, zb, v, u)
             elif has_b:
                 _sample_store(sb, ub[v, u], vb[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = b
                 coverage[v, u] = True
-                rim[v, u] = use_trust and _on_rim(kb, ub[v, u], vb[v, u])
+                rim[v, u] = use_trust and _on_rim(kb, ub[v, u], vb[v, u]) and _beside_hole(za, zb, v, u)
             else:
                 for ch in range(nc):
                     out[v, u, ch] = 0

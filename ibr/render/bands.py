@@ -4,14 +4,15 @@ A kernel compiled with ``parallel=True`` takes two to three times longer to comp
 loop compiled serially (``sample_composite2``: 3.2 s against 1.2 s), and a fresh install pays that
 on its first command. The kernels of the per-frame path are therefore compiled serially with
 ``nogil=True`` and take a half-open range of rows (or bands) ``[start, stop)``;
-:func:`run_bands` splits ``[0, n)`` into one piece per thread, runs the first on the calling
-thread and the others on a shared pool. Each piece owns its rows, so there are no write races.
-One piece per thread: a submitted piece costs ~0.1-0.2 ms of wake-ups, more than finer pieces
-win back in balance (512^2 composite: 3.80 ms with 2 pieces, 5.36 ms with 8, prange 3.56 ms).
+:func:`run_bands` splits ``[0, n)`` into pieces that the calling thread and the pool's threads
+take in turn. Each piece owns its rows, so there are no write races. One task is submitted per
+extra thread (a submission costs ~0.1 ms of wake-ups); finer pieces than threads balance uneven
+work (the rasterizer's bands: 8 pieces on 2 threads).
 """
 
 from __future__ import annotations
 
+import itertools
 import os
 from concurrent.futures import ThreadPoolExecutor
 
@@ -37,21 +38,32 @@ def _pool() -> ThreadPoolExecutor:
     return _POOL
 
 
-def run_bands(kernel, n: int, *args, min_rows: int = 16) -> None:
-    """Run ``kernel(start, stop, *args)`` over ``[0, n)`` in one piece per thread (pieces of at
-    least ``min_rows``).
+def run_bands(kernel, n: int, *args, min_rows: int = 16, pieces_per_thread: int = 1) -> None:
+    """Run ``kernel(start, stop, *args)`` over ``[0, n)`` in pieces of at least ``min_rows``.
 
-    ``kernel`` must release the GIL (``@njit(nogil=True)``) and write only its own rows. The
-    calling thread runs the first piece; exceptions of any piece are raised here.
+    ``kernel`` must release the GIL (``@njit(nogil=True)``) and write only its own rows. With
+    ``pieces_per_thread`` > 1 the pieces are taken in turn by whichever thread is free (uneven
+    pieces, e.g. bands of a rasterizer with more quads at the top, balance out); one task per
+    extra thread is submitted either way, the calling thread works too. Exceptions of any piece
+    are raised here.
     """
-    pieces = max(1, min(thread_count(), n // max(1, min_rows)))
-    if pieces == 1:
+    threads = thread_count()
+    pieces = max(1, min(threads * max(1, pieces_per_thread), n // max(1, min_rows)))
+    if threads == 1 or pieces == 1:
         kernel(0, n, *args)
         return
     bounds = [n * i // pieces for i in range(pieces + 1)]
-    futures = [_pool().submit(kernel, bounds[i], bounds[i + 1], *args) for i in range(1, pieces)]
+    order = itertools.count()  # next() is atomic under the GIL: each piece is taken once
+
+    def work():
+        for i in iter(lambda: next(order), None):
+            if i >= pieces:
+                return
+            kernel(bounds[i], bounds[i + 1], *args)
+
+    futures = [_pool().submit(work) for _ in range(min(threads, pieces) - 1)]
     try:
-        kernel(bounds[0], bounds[1], *args)
+        work()
     finally:
         for f in futures:
             f.result()

@@ -162,13 +162,18 @@ def rim_beside_holes(coverage, rim) -> np.ndarray:
     opened between the two surfaces) it is a dark or bright outline left on the background, and
     the hole fill should replace its colour (:attr:`Composite.replace`).
     """
-    holes = ~coverage
-    near_hole = np.zeros_like(holes)
-    near_hole[1:] |= holes[:-1]
-    near_hole[:-1] |= holes[1:]
-    near_hole[:, 1:] |= holes[:, :-1]
-    near_hole[:, :-1] |= holes[:, 1:]
-    return rim & near_hole
+    out = np.zeros(rim.shape, bool)
+    ys, xs = np.nonzero(rim)  # few pixels: test their four neighbours only
+    if ys.size == 0:
+        return out
+    h, w = rim.shape
+    beside = np.zeros(ys.size, bool)
+    for dy, dx in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+        y, x = ys + dy, xs + dx
+        inside = (y >= 0) & (y < h) & (x >= 0) & (x < w)
+        beside[inside] |= ~coverage[y[inside], x[inside]]
+    out[ys[beside], xs[beside]] = True
+    return out
 
 
 def viewpoint_weights(camera: Camera, sources) -> np.ndarray:
@@ -339,4 +344,4 @@ def sample_composite(
     run_bands(_k.sample_composite2, out.shape[0], sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u,
               mb.map_v, mb.depth, single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage,
               use_trust, ka, kb, rim)
-    return Composite(out, depth, coverage, rim_beside_holes(coverage, rim) if use_trust else None)
+    return Composite(out, depth, coverage, rim if use_trust and not single and rim.any() else None)

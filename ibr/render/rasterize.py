@@ -42,7 +42,6 @@ FOOTPRINTS = ("free", "surface", "quad", "none")
 INTERPOLATIONS = {"linear": cv2.INTER_LINEAR, "cubic": cv2.INTER_CUBIC}
 
 # Work sizes below which a serial kernel beats waking the second thread.
-_PARALLEL_QUADS = 8192
 _PARALLEL_PIXELS = 64 * 64
 
 # A source coordinate far outside every image: remap's constant border returns 0 there.
@@ -198,12 +197,13 @@ def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out:
     nq = len(mesh.rects)
     coef = np.empty((nq, 12), np.float64)
     bbox = np.empty((nq, 4), np.int32)
-    setup = _k.setup_quads if nq >= _PARALLEL_QUADS else _k.setup_quads_serial
-    setup(mesh.rects, mesh.inv_depth_planes, _intrinsics(src), r, t, kt_inv, kt, w, h, coef, bbox)
+    run_bands(_k.setup_quads, nq, mesh.rects, mesh.inv_depth_planes, _intrinsics(src), r, t, kt_inv, kt, w, h, coef, bbox,
+              min_rows=4096)  # quads: a piece per thread from 8192 quads on
     flags = _clamp_flags(mesh, footprint, depth_tol)
     start, order = _k.bucket_bands(bbox, h, _nbands(h))
     run_bands(_k.raster_quads, len(start) - 1, mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, out.depth,
-              out.map_u, out.map_v, out.coverage, min_rows=1 if h * w >= _PARALLEL_PIXELS else len(start))
+              out.map_u, out.map_v, out.coverage, min_rows=1 if h * w >= _PARALLEL_PIXELS else len(start),
+              pieces_per_thread=4)  # quads crowd some bands: balance them
     return out
 
 
