@@ -16,12 +16,23 @@ from numba import njit, prange
 __all__: list[str] = []
 
 
+@njit(cache=True, inline="always")
+def _put(out, v, j, c, x, is_int, maxval):
+    if is_int:  # round half to even and clip, as np.rint + np.clip of the float result
+        out[v, j, c] = min(max(np.rint(x), 0.0), maxval)
+    else:
+        out[v, j, c] = x
+
+
 @njit(cache=True, parallel=True)
-def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, out_cov):
+def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, out_cov, is_int=False, maxval=0.0):
     """Row-preserving forward mapping with linear interpolation between connected neighbors.
 
-    color (H, W, C) float32, z (H, W) float32 (NaN invalid); outputs preallocated:
-    out_color (H, W, C) float32 zeros, out_depth (H, W) float32 inf, out_cov (H, W) bool False.
+    color (H, W, C) any dtype (read as is: uint8 sources move 4x less memory than a float32
+    copy), z (H, W) float32 (NaN invalid); outputs (any contents, every row is initialised
+    here): out_color (H, W, C) -- float32, or with ``is_int`` an integer array that receives
+    ``clip(rint(value), 0, maxval)`` -- 0 where uncovered, out_depth (H, W) float32 (NaN where
+    uncovered), out_cov (H, W) bool. Colours are interpolated in float32 whatever the dtype.
 
     Neighbors i, i+1 (both valid) are connected when their shifts differ by at most
     ``max_jump_px`` (a larger jump is a depth edge: disocclusion, left as a hole). A connected
@@ -37,6 +48,7 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
         izs = np.empty(w)
         ok = np.zeros(w, np.bool_)
         best = np.zeros(w)  # the row's z-buffer in inverse depth (0 = empty)
+        row = np.empty((w, nc), np.float32)  # the row's colours (cache-resident; stored once at the end)
         for i in range(w):
             zi = z[v, i]
             if zi > 0:
@@ -64,7 +76,8 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
                     if iz > best[j]:
                         best[j] = iz
                         for c in range(nc):
-                            out_color[v, j, c] = color[v, i, c] + t * (color[v, i + 1, c] - color[v, i, c])
+                            ci = np.float32(color[v, i, c])
+                            row[j, c] = ci + t * (np.float32(color[v, i + 1, c]) - ci)
             # half footprints on unconnected sides: [x - 0.5, x] and [x, x + 0.5)
             for side in range(2):
                 if (side == 0 and conn_l) or (side == 1 and conn_r):
@@ -79,11 +92,18 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
                     if izi > best[j]:
                         best[j] = izi
                         for c in range(nc):
-                            out_color[v, j, c] = color[v, i, c]
+                            row[j, c] = color[v, i, c]
         for j in range(w):
             if best[j] > 0:
                 out_depth[v, j] = 1.0 / best[j]
                 out_cov[v, j] = True
+                for c in range(nc):
+                    _put(out_color, v, j, c, row[j, c], is_int, maxval)
+            else:
+                out_depth[v, j] = np.nan
+                out_cov[v, j] = False
+                for c in range(nc):
+                    out_color[v, j, c] = 0
 
 
 @njit(cache=True)

@@ -119,20 +119,29 @@ def map_pixels(view: View, *, dx: float, dz: float = 0.0, dpixel: float = 0.0,
     check_choice("method", method, ("pixel", "splat"))
     jump = check_positive("max_jump_px", max_jump_px, allow_inf=True)
     cam = view.camera
-    col = _color32 if _color32 is not None else _float_color(view)  # (both eyes share one conversion)
-    h, w, c = col.shape
-    out_c = np.zeros((h, w, c), np.float32)
-    out_z = np.full((h, w), np.inf, np.float32)
-    cov = np.zeros((h, w), np.bool_)
     zz = np.ascontiguousarray(z, dtype=np.float32)
     if method == "pixel":
         if dz != 0:
             raise ValueError(f"dz: method 'pixel' preserves rows and needs dz = 0, got {dz!r}; use method='splat'")
-        _k.scanline_warp(col, zz, float(cam.fx), dx, dpixel, float(min(jump, 1e30)), out_c, out_z, cov)
+        # internal calls (stereo_pair) pass the source colour as it is and get the result in its
+        # dtype (rounded and clipped in the kernel); the public result stays float32
+        col = _color32 if _color32 is not None else _float_color(view)
+        h, w, c = col.shape
+        is_int = col.dtype.kind in "ui"
+        out_c = np.empty((h, w, c), col.dtype if is_int else np.float32)
+        out_z = np.empty((h, w), np.float32)
+        cov = np.empty((h, w), np.bool_)
+        maxval = float(np.iinfo(col.dtype).max) if is_int else 0.0
+        _k.scanline_warp(col, zz, float(cam.fx), dx, dpixel, float(min(jump, 1e30)), out_c, out_z, cov, is_int, maxval)
     else:
+        col = _float_color(view)
+        h, w, c = col.shape
+        out_c = np.zeros((h, w, c), np.float32)
+        out_z = np.full((h, w), np.inf, np.float32)
+        cov = np.zeros((h, w), np.bool_)
         _k.point_splat(col, zz, float(cam.fx), float(cam.fy), float(cam.cx), float(cam.cy),
                        dx, dz, dpixel, out_c, out_z, cov)
-    out_z[~cov] = np.nan
+        out_z[~cov] = np.nan
     return MappedLayer(out_c, out_z, cov)
 
 
@@ -157,6 +166,13 @@ class StereoPair:
     right_camera: Camera
 
 
+def _raw_color(view: View) -> np.ndarray:
+    """(H, W, C) C-contiguous colour of a view in its own dtype (floats as float32)."""
+    col = np.asarray(view.color)
+    col = col[..., None] if col.ndim == 2 else col
+    return np.ascontiguousarray(col if col.dtype.kind in "ui" else col.astype(np.float32, copy=False))
+
+
 def _float_color(view: View) -> np.ndarray:
     """(H, W, C) float32 C-contiguous colour of a view (its values, not rescaled)."""
     col = np.asarray(view.color)
@@ -164,9 +180,12 @@ def _float_color(view: View) -> np.ndarray:
 
 
 def _to_dtype(img: np.ndarray, dtype) -> np.ndarray:
-    """``img`` (a fresh float32 array: rounded and clipped in place) in ``dtype``."""
+    """``img`` (a fresh float32 array: rounded and clipped in place; or already ``dtype``) in
+    ``dtype``."""
     if img.shape[2] == 1:
         img = img[..., 0]
+    if img.dtype == np.dtype(dtype):
+        return img
     if np.dtype(dtype).kind in "ui":
         info = np.iinfo(dtype)
         np.rint(img, out=img)
@@ -236,14 +255,16 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
 
         mesh = build_mesh(view, **(mesh_options or {}))  # one mesh serves both eyes
     out = {}
-    color32 = None if method == "mesh" else _float_color(view)
+    color32 = _raw_color(view) if method == "pixel" else None  # (both eyes share one conversion)
     for eye, cam in (("left", left_cam), ("right", right_cam)):
         if cam is view.camera:  # the kept eye: the original frame, untouched
             col = np.asarray(view.color)
             out[eye] = (col.copy(), view.depth.copy(), np.zeros(view.shape, bool))
             continue
         c, d, cov = _render_eye(view, cam, method, max_jump_px, mesh, color32)
-        c = np.ascontiguousarray(c[..., None] if c.ndim == 2 else c, dtype=np.float32)
+        c = np.ascontiguousarray(c[..., None] if c.ndim == 2 else c)
+        if c.dtype.kind not in "ui":
+            c = np.ascontiguousarray(c, dtype=np.float32)
         d = np.ascontiguousarray(d, dtype=np.float32)
         holes = np.zeros(cov.shape, np.bool_)
         _fill_k.fill_rows_background(c, d, np.ascontiguousarray(cov), holes)  # in place (fresh arrays)
