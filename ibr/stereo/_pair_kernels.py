@@ -53,8 +53,9 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
             zi = z[v, i]
             if zi > 0:
                 ok[i] = True
-                xs[i] = i - fx * dx / zi + dpixel
-                izs[i] = 1.0 / zi
+                iz = 1.0 / zi  # one division per pixel: the shift is -fx dx / z = -fx dx * (1 / z)
+                izs[i] = iz
+                xs[i] = i - fx * dx * iz + dpixel
         for i in range(w):
             if not ok[i]:
                 continue
