@@ -3,11 +3,11 @@
 numba compiles each kernel the first time it is called, one after the other, on one core: a
 fresh install's first ``ibr interpolate`` spent ~9 s compiling (segmentation 3.6 s, rasterizer
 2.2 s, compositor 1.6 s, hole fill 1.8 s) while the second core idled. :func:`start_warmup`
-starts ``python -m ibr.render.warmup``, which calls the rasterizer and then the hole fill on a
-tiny scene with the argument types of a real run (uint8 colour, float32 depth, the mesh's
-read-only arrays), so both land in numba's on-disk cache while the main process compiles the
-segmentation and the compositor; when the main process reaches them it loads them from the
-cache instead. Nothing here is needed for correctness: if the helper is slow or fails, the
+starts ``python -m ibr.render.warmup``, which calls the mesh's plane fit and labelling, the
+rasterizer and then the hole fill on a tiny scene with the argument types of a real run (uint8
+colour, float32 depth, the mesh's read-only arrays), so they land in numba's on-disk cache while
+the main process compiles the segmentation's splitting and the compositor; when the main process
+reaches them it loads them from the cache instead. Nothing here is needed for correctness: if the helper is slow or fails, the
 main process compiles what it needs itself.
 """
 
@@ -26,13 +26,19 @@ _STARTED: list = []
 
 
 def warm_frame_kernels() -> None:
-    """Call the rasterizer and the hole fill once on a tiny scene (types as in a real run)."""
+    """Call the mesh's plane fit and labelling (the last segmentation steps), the rasterizer and
+    the hole fill once on a tiny scene (types as in a real run), in the order the main process
+    will need them after its own segmentation kernels."""
     from ..base.camera import Camera
+    from ..mesh._segment_kernels import fit_planes_inv_depth, label_rects
     from ..mesh.quad_mesh import QuadMesh
     from .fill import _fill_pullpush_inplace
     from .rasterize import rasterize_mesh
 
     h, w = 24, 32
+    seg_rects = np.array([[0, 0, w, h]], np.int32)
+    fit_planes_inv_depth(np.full((h, w), 0.5), seg_rects)
+    label_rects(seg_rects, h, w)
     cam = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h)
     rects = np.array([[0, 0, w // 2, h], [w // 2, 0, w, h]], np.int32)
     planes = np.array([[0.0, 0.0, 0.5], [0.0, 0.0, 0.25]])  # a step from z = 2 to z = 4
