@@ -6,7 +6,7 @@ Middlebury disparity relation, and the depth of each fixed-point code computed i
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from ibr.base import depth as D
@@ -105,17 +105,23 @@ def test_range_is_distance_to_unprojected_point():
 
 @HYP
 @given(near_far, st.sampled_from([16, 24]), st.lists(st.floats(0, 1, **finite), min_size=1, max_size=30))
+@example(nf=(1.0, 8878.0), bits=16, fractions=[0.9375])  # rounds to the far code, 563 m away (half a z step: 530 m)
 def test_fixed_round_trip_within_half_a_code(nf, bits, fractions):
     n, f = nf
     z = n + np.asarray(fractions) * (f - n) * 0.999
     q = D.fixed_from_z(z, near=n, far=f, bits=bits)
     assert q.dtype == (np.uint16 if bits == 16 else np.uint32)
     back = D.z_from_fixed(q, near=n, far=f, bits=bits, far_is_empty=False).astype(np.float64)
-    # Rounding to the nearest code: |z - z(q)| <= half the step of the code interval around z.
-    half = 0.5 * np.maximum(D.zbuffer_step(z_of_code(np.maximum(q.astype(np.int64) - 1, 0), n, f, bits),
-                                           near=n, far=f, bits=bits),
-                            np.nan_to_num(D.zbuffer_step(z_of_code(q, n, f, bits), near=n, far=f, bits=bits)))
-    assert np.all(np.abs(back - z) <= half * (1 + 1e-6) + 4e-7 * z)
+    np.testing.assert_allclose(back, z_of_code(q, n, f, bits), rtol=1e-6)  # float32 output
+    # Rounding to the nearest code in window space: z lies between the depths of the half codes
+    # around q. (Not within half a z step: near the far plane one code spans hundreds of metres
+    # and the window-space midpoint is far from the z-space midpoint.)
+    qf, top = q.astype(np.float64), 2**bits - 1
+    lo, hi = z_of_code(np.maximum(qf - 0.5, 0), n, f, bits), z_of_code(np.minimum(qf + 0.5, top), n, f, bits)
+    assert np.all((z >= lo * (1 - 1e-9)) & (z <= hi * (1 + 1e-9)))
+    # and the result is within one whole code step of z
+    step = D.zbuffer_step(z_of_code(np.maximum(qf - 1, 0), n, f, bits), near=n, far=f, bits=bits)
+    assert np.all(np.abs(back - z) <= step * (1 + 1e-6) + 4e-7 * z)  # + float32 rounding of the output
 
 
 # ----------------------------------------------------------------------------- seed 003 error

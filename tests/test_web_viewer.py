@@ -214,3 +214,28 @@ def test_faces_as_perspective_views_are_the_cube_faces():
     for face, (yaw, pitch) in zip(faces, FACE_VIEWS, strict=True):
         view = P.perspective(eq, yaw_deg=yaw, pitch_deg=pitch, fov_deg=90.0, width=128, height=128)
         np.testing.assert_allclose(view, face, atol=1e-5)
+
+
+@pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
+def test_a_missing_tile_is_named_in_the_page(tmp_path):
+    """A tile pyramid with one tile deleted: a zoomed view that needs it names it in the HUD (the
+    base faces stay on screen), never a blank page."""
+    import tempfile
+
+    from browser import DevTools
+
+    site = tmp_path / "site"
+    write_site(site, np.full((1024, 2048, 3), 0.5, np.float32), tiles=True, face_size=1024)
+    (site / "tile-1-pz-0-0.png").unlink()  # level 1: 1024-px faces in 2 x 2 tiles of 512 px
+    server = serve(site)
+    dt = DevTools.start(W, H, tempfile.mkdtemp(prefix="ibr-chromium-", dir=tmp_path))
+    try:
+        dt.call("Page.enable")
+        dt.call("Page.navigate", url=site_url(server, yaw_deg=0.0, pitch_deg=0.0, fov_deg=30.0))
+        dt.wait_for("((document.getElementById('hud') || {}).textContent || '').startsWith('missing tile ')", timeout=30)
+        assert dt.eval("document.getElementById('hud').textContent").endswith("/tile-1-pz-0-0.png")
+        assert dt.eval("getComputedStyle(document.getElementById('hud')).display") == "block"
+    finally:
+        dt.close()
+        server.shutdown()
+        server.server_close()
