@@ -219,7 +219,8 @@ def test_faces_as_perspective_views_are_the_cube_faces():
 @pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
 def test_a_missing_tile_is_named_in_the_page(tmp_path):
     """A tile pyramid with one tile deleted: a zoomed view that needs it names it in the HUD (the
-    base faces stay on screen), never a blank page."""
+    base faces stay on screen), never a blank page; the message stays when the view turns (the
+    compass line is redrawn beside it)."""
     import tempfile
 
     from browser import DevTools
@@ -233,8 +234,12 @@ def test_a_missing_tile_is_named_in_the_page(tmp_path):
         dt.call("Page.enable")
         dt.call("Page.navigate", url=site_url(server, yaw_deg=0.0, pitch_deg=0.0, fov_deg=30.0))
         dt.wait_for("((document.getElementById('hud') || {}).textContent || '').startsWith('missing tile ')", timeout=30)
-        assert dt.eval("document.getElementById('hud').textContent").endswith("/tile-1-pz-0-0.png")
+        problem = dt.eval("document.getElementById('hud').textContent").split("  |  ")[0]
+        assert problem.endswith("/tile-1-pz-0-0.png")
         assert dt.eval("getComputedStyle(document.getElementById('hud')).display") == "block"
+        dt.eval("window.dispatchEvent(new KeyboardEvent('keydown', {key: 'ArrowRight'}))")
+        dt.wait_for("document.getElementById('hud').textContent.includes('yaw 1.7')", timeout=30)  # 5 deg x 30/90
+        assert dt.eval("document.getElementById('hud').textContent").startswith(problem + "  |  ")
     finally:
         dt.close()
         server.shutdown()
