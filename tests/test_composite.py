@@ -143,3 +143,51 @@ def test_fused_sampling_matches_remap_then_composite():
     # gradient of the random image <= 255 per pixel, remap position error <= 1/64 px per axis
     assert np.abs(fused.color - ref.color)[c].max() <= 2 * 255 / 64 + 1e-3
     assert np.abs(fused.color - ref.color)[c].mean() < 1.0
+
+
+def test_remap_composite_matches_the_exact_sampler_within_a_level():
+    """remap_composite (cv2.remap of colour + trust, then one pass) against sample_composite (exact
+    float32 bilinear) on the bundled clutter pair rendered half-way, trust and rims from each
+    mesh: same coverage, same pixels handed to the fill, colours within one 8-bit level. And
+    on random maps reaching past the border (repeated border pixels in both): within the
+    position rounding of remap (1/64 px of a gradient up to 255 per pixel) plus the rounding of
+    the 8-bit layers."""
+    from ibr.io import load_view
+    from ibr.render.composite import remap_composite, rgbt_source, sample_composite
+    from ibr.render.rasterize import SourceMaps
+    from ibr.render.view_synthesis import _maps, _mesh_key, _source
+    from samples import DATA_DIR
+
+    a, b = load_view(DATA_DIR / "clutter_a.json"), load_view(DATA_DIR / "clutter_b.json")
+    cam = interpolate_cameras(a.camera, b.camera, 0.5)
+    maps = [_maps(v, cam, "mesh", "free", "", {}, slot) for v, slot in zip((a, b), "ab")]
+    w = viewpoint_weights(cam, [a.camera, b.camera])
+    packed = [_source(v).trust(_mesh_key({})) for v in (a, b)]
+    ref = sample_composite([a.color, b.color], maps, w, dtype=np.uint8, trust=packed)
+    new = remap_composite([rgbt_source(v.color, k[..., 0]) for v, k in zip((a, b), packed)], maps, w,
+                          rims=[k[..., 1] < 0 for k in packed])
+    np.testing.assert_array_equal(new.coverage, ref.coverage)
+    assert ref.replace is not None and np.array_equal(new.replace, ref.replace)
+    c = ref.coverage
+    assert np.abs(new.color.astype(int) - ref.color.astype(int))[c].max() <= 1
+    np.testing.assert_allclose(new.depth[c], ref.depth[c], rtol=1e-3)
+
+    rng = np.random.default_rng(5)
+    h, wd = 24, 32
+    src = [rng.integers(0, 256, (20, 30, 3)).astype(np.uint8) for _ in range(2)]
+    rmaps = []
+    for k in range(2):
+        z = rng.uniform(1.0, 1.05, (h, wd)).astype(np.float32)
+        z[rng.random((h, wd)) < 0.2] = np.nan
+        u = rng.uniform(-0.5, 29.5, (h, wd)).astype(np.float32)
+        v = rng.uniform(-0.5, 19.5, (h, wd)).astype(np.float32)
+        rmaps.append(SourceMaps(u, v, z, np.isfinite(z)))
+    ref = sample_composite(src, rmaps, [0.4, 0.6], dtype=np.uint8)
+    new = remap_composite([rgbt_source(s) for s in src], rmaps, [0.4, 0.6])
+    np.testing.assert_array_equal(new.coverage, ref.coverage)
+    d = np.abs(new.color.astype(int) - ref.color.astype(int))[ref.coverage]
+    assert d.max() <= 2 * 255 / 64 + 1.5 and d.mean() < 1.0
+    with pytest.raises(ValueError, match=r"sources\[0\]: expected \(H, W, 4\) uint8"):
+        remap_composite([src[0]], rmaps[:1], [1.0])
+    with pytest.raises(ValueError, match="color: expected"):
+        rgbt_source(src[0][..., :2])

@@ -207,3 +207,71 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
                     out[v, u, ch] = 0
                 depth[v, u] = np.nan
                 coverage[v, u] = False
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, out, depth, coverage, use_trust,
+                   ra, ua, va, rb, ub, vb, rim):
+    """Two-layer composite of 8-bit layers that ``cv2.remap`` sampled from colour + trust sources
+    ((H, W, 4) uint8: three colour channels, then the trust in 1/255, see
+    ``composite.rgbt_source``); the rule of :func:`sample_composite2` with the trust read from
+    channel 3. ``ra``, ``rb`` (H_s, W_s) bool: each source's background rim, looked up at the
+    nearest source pixel of the maps (ua, va), (ub, vb) where only one layer covers a pixel and a
+    4-neighbour is a hole (``use_trust`` only). ``out`` (H, W, 3) uint8. Rows ``v0 .. v1-1``."""
+    w = out.shape[1]
+    for v in range(v0, v1):
+        for u in range(w):
+            rim[v, u] = False
+            a = za[v, u]
+            has_a = a > 0.0
+            b = np.float32(np.nan)
+            has_b = False
+            if not single:
+                b = zb[v, u]
+                has_b = b > 0.0
+            if has_a and has_b:
+                if blend and abs(a - b) <= rel_tol * min(a, b):
+                    xa, xb = wa, wb
+                    ta = la[v, u, 3]
+                    tb = lb[v, u, 3]
+                    if use_trust and (ta < 255 or tb < 255):  # a mixed source pixel among the taps
+                        xa, xb = _trust_weights(wa, wb, np.float32(ta) * np.float32(1 / 255),
+                                                np.float32(tb) * np.float32(1 / 255))
+                    for ch in range(3):
+                        out[v, u, ch] = min(max(xa * np.float32(la[v, u, ch]) + xb * np.float32(lb[v, u, ch]) + 0.5,
+                                                0.0), 255.0)
+                    depth[v, u] = xa * a + xb * b
+                elif (not blend) or a <= b:
+                    for ch in range(3):
+                        out[v, u, ch] = la[v, u, ch]
+                    depth[v, u] = a
+                else:
+                    for ch in range(3):
+                        out[v, u, ch] = lb[v, u, ch]
+                    depth[v, u] = b
+                coverage[v, u] = True
+            elif has_a:
+                for ch in range(3):
+                    out[v, u, ch] = la[v, u, ch]
+                depth[v, u] = a
+                coverage[v, u] = True
+                rim[v, u] = use_trust and _nearest(ra, ua[v, u], va[v, u]) and _beside_hole(za, zb, v, u)
+            elif has_b:
+                for ch in range(3):
+                    out[v, u, ch] = lb[v, u, ch]
+                depth[v, u] = b
+                coverage[v, u] = True
+                rim[v, u] = use_trust and _nearest(rb, ub[v, u], vb[v, u]) and _beside_hole(za, zb, v, u)
+            else:
+                for ch in range(3):
+                    out[v, u, ch] = 0
+                depth[v, u] = np.nan
+                coverage[v, u] = False
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _nearest(flags, x, y):
+    """flags (H, W) bool at the nearest pixel of (x, y) (clamped to the image; the pixel
+    :func:`_on_rim` reads)."""
+    h, w = flags.shape
+    return flags[min(max(int(np.floor(y + 0.5)), 0), h - 1), min(max(int(np.floor(x + 0.5)), 0), w - 1)]

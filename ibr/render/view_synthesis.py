@@ -23,8 +23,8 @@ import numpy as np
 
 from ..base.validate import check_choice, check_finite_scalar, check_positive
 from ..base.camera import Camera, interpolate_cameras
-from .composite import (COMPOSITE_MODES, composite, mixed_pixels, pack_trust, sample_composite, source_trust,
-                        viewpoint_weights)
+from .composite import (COMPOSITE_MODES, composite, mixed_pixels, pack_trust, remap_composite, rgbt_source,
+                        sample_composite, source_trust, viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_pullpush_inplace, parallax_axis
 from .rasterize import FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_into, as_float_color, sample_maps, scratch, scratch_maps
 from ..base.view import View
@@ -108,10 +108,34 @@ class _Source:
         depth codes are no steps) or, for ``None`` (forward splat), from the raw depth."""
         t = self._trust.get(mesh_key)
         if t is None:
-            depth = self._depth if mesh_key is None else self.meshes[mesh_key].depth()
+            depth = self._source_depth(mesh_key)
             t = self._trust[mesh_key] = pack_trust(source_trust(depth), mixed_pixels(depth, side="far"))
             t.setflags(write=False)
         return t
+
+    def rgbt(self, mesh_key, silhouettes: bool):
+        """For an 8-bit three-channel source, what :func:`~ibr.render.composite.remap_composite`
+        reads: the colour with the trust as a fourth channel (:func:`rgbt_source`; 255 everywhere
+        without ``silhouettes``) and the background rim (None without ``silhouettes``), cached
+        like :meth:`trust`."""
+        key = ("rgbt", mesh_key if silhouettes else "plain")
+        got = self._trust.get(key)
+        if got is None:
+            if silhouettes:
+                depth = self._source_depth(mesh_key)
+                got = (rgbt_source(self.raw, source_trust(depth)), mixed_pixels(depth, side="far"))
+            else:
+                got = (rgbt_source(self.raw), None)
+            for x in got:
+                if x is not None:
+                    x.setflags(write=False)
+            self._trust[key] = got
+        return got
+
+    def _source_depth(self, mesh_key):
+        """The depth of the mesh for ``mesh_key`` (planes: quantized depth codes are no steps) or,
+        for ``None`` (forward splat), the raw depth."""
+        return self._depth if mesh_key is None else self.meshes[mesh_key].depth()
 
     @property
     def color(self) -> np.ndarray:
@@ -232,11 +256,19 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
     maps = [_maps(v, camera, method, footprint, splat, o, slot) for v, o, slot in zip(views, mesh_options, "ab")]
     if not any(m.coverage.any() for m in maps):
         return None
+    keys = [_mesh_key(o) if method == "mesh" else None for o in mesh_options]
+    use_trust = silhouettes and len(views) == 2
+    raw = [_source(v).raw for v in views]
+    if interpolation == "linear" and raw[0].dtype == np.uint8 and raw[0].shape[2] == 3 and np.dtype(dtype) == np.uint8:
+        # 8-bit colour: cv2.remap's four-channel SIMD path samples colour + trust, then one pass
+        got = [_source(v).rgbt(k, use_trust) for v, k in zip(views, keys)]
+        layers = [scratch((slot, "rgbt"), (*camera.shape, 4), np.uint8) for slot in "ab"[:len(views)]]
+        return remap_composite([g[0] for g in got], maps, weights, mode=composite_mode, depth_tol=depth_tol,
+                               rims=[g[1] for g in got] if use_trust else None, layers=layers)
     trust = None
-    if silhouettes and len(views) == 2:
-        trust = [_source(v).trust(_mesh_key(o) if method == "mesh" else None) for v, o in zip(views, mesh_options)]
+    if use_trust:
+        trust = [_source(v).trust(k) for v, k in zip(views, keys)]
     if interpolation == "linear":  # fused numba pass (no layer images, no OpenCV thread pool)
-        raw = [_source(v).raw for v in views]
         return sample_composite(raw, maps, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype,
                                 trust=trust)
     colors = [_source(v).color for v in views]
