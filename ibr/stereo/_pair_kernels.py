@@ -16,23 +16,16 @@ from numba import njit, prange
 __all__: list[str] = []
 
 
-@njit(cache=True, inline="always")
-def _put(out, v, j, c, x, is_int, maxval):
-    if is_int:  # round half to even and clip, as np.rint + np.clip of the float result
-        out[v, j, c] = min(max(np.rint(x), 0.0), maxval)
-    else:
-        out[v, j, c] = x
-
-
-@njit(cache=True, parallel=True)
-def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, out_cov, is_int=False, maxval=0.0):
+@njit(cache=True, parallel=True, error_model="numpy")
+def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, out_cov, is_int=False):
     """Row-preserving forward mapping with linear interpolation between connected neighbors.
 
     color (H, W, C) any dtype (read as is: uint8 sources move 4x less memory than a float32
     copy), z (H, W) float32 (NaN invalid); outputs (any contents, every row is initialised
-    here): out_color (H, W, C) -- float32, or with ``is_int`` an integer array that receives
-    ``clip(rint(value), 0, maxval)`` -- 0 where uncovered, out_depth (H, W) float32 (NaN where
-    uncovered), out_cov (H, W) bool. Colours are interpolated in float32 whatever the dtype.
+    here): out_color (H, W, C) -- float32, or with ``is_int`` an integer array that receives the
+    value rounded half up (a convex combination of source values: never out of range) -- 0 where
+    uncovered, out_depth (H, W) float32 (NaN where uncovered), out_cov (H, W) bool. Colours are
+    interpolated in float32 whatever the dtype.
 
     Neighbors i, i+1 (both valid) are connected when their shifts differ by at most
     ``max_jump_px`` (a larger jump is a depth edge: disocclusion, left as a hole). A connected
@@ -48,7 +41,7 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
         izs = np.empty(w)
         ok = np.zeros(w, np.bool_)
         best = np.zeros(w)  # the row's z-buffer in inverse depth (0 = empty)
-        row = np.empty((w, nc), np.float32)  # the row's colours (cache-resident; stored once at the end)
+        row = np.zeros((w, nc), np.float32)  # the row's colours (cache-resident; stored once at the end)
         for i in range(w):
             zi = z[v, i]
             if zi > 0:
@@ -56,13 +49,16 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
                 iz = 1.0 / zi  # one division per pixel: the shift is -fx dx / z = -fx dx * (1 / z)
                 izs[i] = iz
                 xs[i] = i - fx * dx * iz + dpixel
+        next_connected = -1  # i + 1 when i connects to its right neighbour (its conn_l then)
         for i in range(w):
             if not ok[i]:
                 continue
             xi = xs[i]
             izi = izs[i]
+            conn_l = next_connected == i
             conn_r = i + 1 < w and ok[i + 1] and abs((xs[i + 1] - (i + 1)) - (xi - i)) <= max_jump_px
-            conn_l = i > 0 and ok[i - 1] and abs((xi - i) - (xs[i - 1] - (i - 1))) <= max_jump_px
+            if conn_r:
+                next_connected = i + 1
             if conn_r:
                 xr = xs[i + 1]
                 izr = izs[i + 1]
@@ -70,7 +66,7 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
                 j0 = max(int(np.ceil(a)), 0)
                 j1 = min(int(np.floor(b)), w - 1)
                 span = xr - xi
-                inv_span = 0.0 if span == 0 else 1.0 / span
+                inv_span = 0.0 if span == 0 or j0 > j1 else 1.0 / span  # no division without a pixel
                 for j in range(j0, j1 + 1):
                     t = (j - xi) * inv_span
                     iz = izi + t * (izr - izi)
@@ -94,17 +90,19 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
                         best[j] = izi
                         for c in range(nc):
                             row[j, c] = color[v, i, c]
+        # output in branch-free loops that LLVM vectorizes (uncovered colours are the zeros of row)
         for j in range(w):
-            if best[j] > 0:
-                out_depth[v, j] = 1.0 / best[j]
-                out_cov[v, j] = True
-                for c in range(nc):
-                    _put(out_color, v, j, c, row[j, c], is_int, maxval)
-            else:
-                out_depth[v, j] = np.nan
-                out_cov[v, j] = False
-                for c in range(nc):
-                    out_color[v, j, c] = 0
+            bj = best[j]
+            out_depth[v, j] = 1.0 / bj if bj > 0 else np.nan
+            out_cov[v, j] = bj > 0
+        flat = row.reshape(-1)
+        dst = out_color[v].reshape(-1)
+        if is_int:
+            for k in range(w * nc):
+                dst[k] = flat[k] + np.float32(0.5)  # round half up (truncation of x + 0.5 >= 0)
+        else:
+            for k in range(w * nc):
+                dst[k] = flat[k]
 
 
 @njit(cache=True)

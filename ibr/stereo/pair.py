@@ -124,15 +124,14 @@ def map_pixels(view: View, *, dx: float, dz: float = 0.0, dpixel: float = 0.0,
         if dz != 0:
             raise ValueError(f"dz: method 'pixel' preserves rows and needs dz = 0, got {dz!r}; use method='splat'")
         # internal calls (stereo_pair) pass the source colour as it is and get the result in its
-        # dtype (rounded and clipped in the kernel); the public result stays float32
+        # dtype (rounded half up in the kernel); the public result stays float32
         col = _color32 if _color32 is not None else _float_color(view)
         h, w, c = col.shape
         is_int = col.dtype.kind in "ui"
         out_c = np.empty((h, w, c), col.dtype if is_int else np.float32)
         out_z = np.empty((h, w), np.float32)
         cov = np.empty((h, w), np.bool_)
-        maxval = float(np.iinfo(col.dtype).max) if is_int else 0.0
-        _k.scanline_warp(col, zz, float(cam.fx), dx, dpixel, float(min(jump, 1e30)), out_c, out_z, cov, is_int, maxval)
+        _k.scanline_warp(col, zz, float(cam.fx), dx, dpixel, float(min(jump, 1e30)), out_c, out_z, cov, is_int)
     else:
         col = _float_color(view)
         h, w, c = col.shape
