@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.spatial.transform import Rotation
+from scipy.spatial.transform import Rotation, Slerp
 
 from ibr.base.camera import GL_FROM_CV, Camera, camera_from_gl_projection, gl_frustum_from_projection, interpolate_cameras, look_at
 from ibr.base.depth import window_from_z
@@ -173,6 +173,19 @@ def test_interpolate_cameras_endpoints_midpoint_and_extrapolation():
         interpolate_cameras(a, Camera(100.0, 100.0, 1.0, 1.0, 10, 10), 0.5)
     with pytest.raises(ValueError, match="t: expected a finite number"):
         interpolate_cameras(a, b, float("nan"))
+
+
+def test_interpolate_cameras_large_rotation_is_the_geodesic():
+    """A 3.0-rad turn (near the half turn where rotation vectors get delicate): each step from a
+    is t times the relative rotation vector, as scipy's Slerp gives it."""
+    a = Camera(100.0, 100.0, 30.0, 20.0, 64, 48, pose_from([-0.4, 1.1, 0.3], [1, 2, 3]))
+    rel = Rotation.from_rotvec(3.0 * np.array([0.48, -0.6, 0.64]))
+    pose_b = np.eye(4)
+    pose_b[:3, :3] = (rel * Rotation.from_matrix(a.world_from_cam[:3, :3])).as_matrix()
+    b = Camera(100.0, 100.0, 30.0, 20.0, 64, 48, pose_b)
+    slerp = Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([a.world_from_cam[:3, :3], pose_b[:3, :3]])))
+    for t in (0.1, 0.5, 0.9):
+        np.testing.assert_allclose(interpolate_cameras(a, b, t).world_from_cam[:3, :3], slerp(t).as_matrix(), atol=1e-9)
 
 
 # ----------------------------------------------------------------------------- OpenGL interop
