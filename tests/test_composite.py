@@ -191,3 +191,26 @@ def test_remap_composite_matches_the_exact_sampler_within_a_level():
         remap_composite([src[0]], rmaps[:1], [1.0])
     with pytest.raises(ValueError, match="color: expected"):
         rgbt_source(src[0][..., :2])
+
+
+def test_layers_one_quantization_code_apart_blend():
+    """Integer disparities (baseline 0.1, f 1000: one code is 0.01 in inverse depth, 2 % of z at
+    z = 2). Without the quantization the 2 % tolerance z-tests layers a code and more apart (the
+    nearer wins); with it, layers QUANT_BLEND_CODES codes apart in inverse depth (beyond the
+    relative tolerance) are blended, and twice that is still z-tested."""
+    from ibr.base.depth import DepthQuantization
+    from ibr.render.composite import QUANT_BLEND_CODES
+
+    q = DepthQuantization.disparity(baseline=0.1, focal_px=1000.0)
+    za = 1 / 0.5
+    zb_in = 1 / (0.5 + 0.9 * QUANT_BLEND_CODES * 0.01)  # inside the quantization tolerance
+    zb_out = 1 / (0.5 + 2.0 * QUANT_BLEND_CODES * 0.01)  # outside it (and the 2 % beside it)
+    assert (za - zb_in) / zb_in > 0.02  # beyond the relative tolerance alone
+    a = layer(np.full((1, 2), 100.0), [[za, za]])
+    b = layer(np.full((1, 2), 200.0), [[zb_in, zb_out]])
+    plain = composite([a, b], [0.5, 0.5])
+    quant = composite([a, b], [0.5, 0.5], quantization=[q, None])
+    np.testing.assert_allclose(plain.color[0, :, 0], [200.0, 200.0])  # z-test: b is nearer
+    np.testing.assert_allclose(quant.color[0, :, 0], [150.0, 200.0])  # blended / still z-tested
+    with pytest.raises(TypeError, match="quantization: expected an ibr.base.depth.DepthQuantization"):
+        composite([a, b], [0.5, 0.5], quantization=0.5)

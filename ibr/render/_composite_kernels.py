@@ -21,6 +21,15 @@ def _store(out, v, u, ch, x, is_int, maxval):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _agree(a, b, rel_tol, quant0, quant2):
+    """Whether two layer depths a, b are one surface: within ``rel_tol`` of the nearer, plus the
+    depth encoding's quantization (``quant0 a b + quant2``: |1/a - 1/b| within k codes of the
+    inverse-depth step c0 + c2 / z^2 of :class:`ibr.base.depth.DepthQuantization`, quant0 = k c0,
+    quant2 = k c2; zero without quantization)."""
+    return abs(a - b) <= rel_tol * min(a, b) + quant0 * a * b + quant2
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _trust_weights(wa, wb, ka, kb):
     """Blend weights of two agreeing layers scaled by the fourth power of their trust (1 clean,
     ~0 a mixed silhouette pixel, bilinear in between); a small floor keeps the viewpoint weights
@@ -34,12 +43,13 @@ def _trust_weights(wa, wb, ka, kb):
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, depth, coverage, use_trust, ka, kb):
+def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, quant0, quant2, is_int, maxval, out, depth, coverage, use_trust,
+               ka, kb):
     """Two-layer composite (seed 002 section 2.2 step (1) and the depth-aware blend).
 
     ca, cb (H, W, C) float32 colors, za, zb (H, W) float32 depths (NaN uncovered), wa >= wb the
     viewpoint weights (layer a is the nearer source). blend=False: a in front, b fills a's holes.
-    blend=True: where both cover and ``|za - zb| <= rel_tol * min(za, zb)`` the colors and depths
+    blend=True: where both cover and the depths agree (:func:`_agree`) the colors and depths
     are mixed with weights wa, wb (scaled by the per-pixel trust ka, kb when ``use_trust``);
     elsewhere the nearer surface wins. ``out`` may be an integer array (values rounded and
     clipped to [0, maxval])."""
@@ -51,7 +61,7 @@ def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, is_int, maxval, out, dept
             has_a = a > 0.0
             has_b = b > 0.0
             if has_a and has_b:
-                if blend and abs(a - b) <= rel_tol * min(a, b):
+                if blend and _agree(a, b, rel_tol, quant0, quant2):
                     xa, xb = wa, wb
                     if use_trust:
                         xa, xb = _trust_weights(wa, wb, ka[v, u], kb[v, u])
@@ -149,8 +159,8 @@ def _beside_hole(za, zb, v, u):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, is_int, maxval,
-                      out, depth, coverage, use_trust, ka, kb, rim):
+def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, quant0, quant2, is_int,
+                      maxval, out, depth, coverage, use_trust, ka, kb, rim):
     """Fused bilinear sampling + two-layer composite (see composite2): layer colors are sampled
     (in float32) from the sources sa, sb (any dtype: uint8 sources are read as is, 4x less memory
     traffic than a float32 copy, with identical results) at the maps (ua, va), (ub, vb) only where they are used, so
@@ -174,7 +184,7 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
                 b = zb[v, u]
                 has_b = b > 0.0
             if has_a and has_b:
-                if blend and abs(a - b) <= rel_tol * min(a, b):
+                if blend and _agree(a, b, rel_tol, quant0, quant2):
                     p0, p1, p2, p3, pax, pay = _taps(sa, ua[v, u], va[v, u])
                     q0, q1, q2, q3, qax, qay = _taps(sb, ub[v, u], vb[v, u])
                     xa, xb = wa, wb
@@ -210,7 +220,7 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, out, depth, coverage, use_trust,
+def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant0, quant2, out, depth, coverage, use_trust,
                    ra, ua, va, rb, ub, vb, rim):
     """Two-layer composite of 8-bit layers that ``cv2.remap`` sampled from colour + trust sources
     ((H, W, 4) uint8: three colour channels, then the trust in 1/255, see
@@ -230,7 +240,7 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, out, 
                 b = zb[v, u]
                 has_b = b > 0.0
             if has_a and has_b:
-                if blend and abs(a - b) <= rel_tol * min(a, b):
+                if blend and _agree(a, b, rel_tol, quant0, quant2):
                     xa, xb = wa, wb
                     ta = la[v, u, 3]
                     tb = lb[v, u, 3]

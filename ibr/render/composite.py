@@ -33,6 +33,9 @@ STEP_REL = 0.02
 STEP_RATIO = 3.0
 #: Trust of a mixed silhouette pixel in the blend (clean pixels: 1).
 MIXED_TRUST = 0.03
+#: Codes of the depth encoding's quantization step added to the blend's depth tolerance (two
+#: sources' planes fitted to integer codes may each be half a code off; #11)
+QUANT_BLEND_CODES = 1.5
 
 _NO_TRUST = np.ones((1, 1, 2), np.float32)
 _NO_TRUST_2D = np.ones((1, 1), np.float32)
@@ -57,6 +60,24 @@ class Composite:
 
 #: Pixels per strip in :func:`mixed_pixels` (bounds its temporary arrays to a few MB)
 _STRIP_PIXELS = 1 << 18
+
+
+def _quant_tolerance(quantization) -> tuple[float, float]:
+    """(quant0, quant2) of the composite kernels' agreement test for ``quantization`` (a
+    :class:`~ibr.base.depth.DepthQuantization`, a sequence of them or None per source: the
+    coarsest wins): ``QUANT_BLEND_CODES`` times its c0 and c2."""
+    from ..base.depth import DepthQuantization
+
+    qs = quantization if isinstance(quantization, (list, tuple)) else [quantization]
+    c0 = c2 = 0.0
+    for i, q in enumerate(qs):
+        if q is None:
+            continue
+        if not isinstance(q, DepthQuantization):
+            raise TypeError(f"quantization: expected an ibr.base.depth.DepthQuantization (or one per source), got "
+                            f"{type(q).__name__}")
+        c0, c2 = max(c0, q.c0), max(c2, q.c2)
+    return QUANT_BLEND_CODES * c0, QUANT_BLEND_CODES * c2
 
 
 def _steps(q: np.ndarray, axis: int, rel: float, ratio: float) -> np.ndarray:
@@ -207,6 +228,7 @@ def composite(
     depth_tol: float = 0.02,
     dtype=np.float32,
     trust=None,
+    quantization=None,
 ) -> Composite:
     """Combine one or two layers rendered into the same camera.
 
@@ -229,6 +251,10 @@ def composite(
     trust : sequence of (H, W) float arrays, optional
         Per layer, the trust of each target pixel's colour (e.g. :func:`source_trust` sampled
         like the colour); where the layers agree, the blend weights are scaled by it.
+    quantization : DepthQuantization or sequence of them, optional
+        The sources' depth quantization (:class:`ibr.base.depth.DepthQuantization`, e.g. integer
+        disparities): layers within ``QUANT_BLEND_CODES`` codes of each other (in inverse depth)
+        also count as one surface, so planes fitted to coarse codes still blend.
     """
     check_choice("mode", mode, COMPOSITE_MODES)
     depth_tol = check_positive("depth_tol", depth_tol)
@@ -268,6 +294,7 @@ def composite(
             raise ValueError(f"trust: expected 2 arrays of shape {(h, wd)}, got {[t.shape for t in k]}")
         ka, kb = k[order[0]], k[order[1]]
     _k.composite2(a.color, a.depth, b.color, b.depth, wa, wb, mode == "blend", depth_tol,
+                  *_quant_tolerance(quantization),
                   is_int, maxval, out, depth, coverage, use_trust, ka, kb)
     return Composite(out, depth, coverage)
 
@@ -281,6 +308,7 @@ def sample_composite(
     depth_tol: float = 0.02,
     dtype=np.float32,
     trust=None,
+    quantization=None,
 ) -> Composite:
     """Sample and composite in one pass: :func:`composite` of the layers that bilinear sampling of
     ``sources`` at ``maps`` would give, without materializing the layer colors.
@@ -293,7 +321,7 @@ def sample_composite(
     maps : sequence of SourceMaps
         Per layer: source coordinates (pixel centers at integers: 3.0 is column 3, 3.5 the mean of
         columns 3 and 4), target depth (NaN uncovered); all of the target size.
-    weights, mode, depth_tol, dtype
+    weights, mode, depth_tol, dtype, quantization
         As in :func:`composite`.
     trust : sequence of (H_s, W_s) float32 arrays, optional
         Per source, :func:`source_trust` (source pixel grid; or its :func:`pack_trust`, which
@@ -344,8 +372,8 @@ def sample_composite(
         ka, kb = k[a], k[b]
     rim = np.empty(depth.shape, np.bool_)
     run_bands(_k.sample_composite2, out.shape[0], sources[a], ma.map_u, ma.map_v, ma.depth, sources[b], mb.map_u,
-              mb.map_v, mb.depth, single, wa, wb, mode == "blend", depth_tol, is_int, maxval, out, depth, coverage,
-              use_trust, ka, kb, rim)
+              mb.map_v, mb.depth, single, wa, wb, mode == "blend", depth_tol, *_quant_tolerance(quantization), is_int,
+              maxval, out, depth, coverage, use_trust, ka, kb, rim)
     return Composite(out, depth, coverage, rim if use_trust and not single and rim.any() else None)
 
 
@@ -369,7 +397,7 @@ def rgbt_source(color, trust=None) -> np.ndarray:
 
 
 def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: float = 0.02, rims=None,
-                    layers=None) -> Composite:
+                    layers=None, quantization=None) -> Composite:
     """:func:`sample_composite` for 8-bit colour: each source is sampled by ``cv2.remap`` (its
     SIMD path for four 8-bit channels), then the layers are composited in one pass.
 
@@ -378,7 +406,7 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
     sources : sequence of (H_s, W_s, 4) uint8
         One or two :func:`rgbt_source` arrays: colour and trust, sampled together (the trust with
         the colour's bilinear weights, as :func:`sample_composite` does).
-    maps, weights, mode, depth_tol
+    maps, weights, mode, depth_tol, quantization
         As in :func:`sample_composite`.
     rims : sequence of (H_s, W_s) bool, optional
         Per source, its background rim (:func:`mixed_pixels` with ``side="far"``); with two
@@ -428,5 +456,6 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
     rim = np.empty((h, wd), np.bool_)
     ma, mb = maps[a], maps[b]
     run_bands(_k.composite_rgbt, h, sampled[a], ma.depth, sampled[b], mb.depth, single, wa, wb, mode == "blend",
-              depth_tol, out, depth, coverage, use_trust, ra, ma.map_u, ma.map_v, rb, mb.map_u, mb.map_v, rim)
+              depth_tol, *_quant_tolerance(quantization), out, depth, coverage, use_trust, ra, ma.map_u, ma.map_v, rb,
+              mb.map_u, mb.map_v, rim)
     return Composite(out, depth, coverage, rim if use_trust and rim.any() else None)

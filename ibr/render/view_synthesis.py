@@ -23,6 +23,7 @@ import numpy as np
 
 from ..base.validate import check_choice, check_finite_scalar, check_positive
 from ..base.camera import Camera, interpolate_cameras
+from ..base.depth import quantization_of
 from .composite import (COMPOSITE_MODES, composite, mixed_pixels, pack_trust, remap_composite, rgbt_source,
                         sample_composite, source_trust, viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_pullpush_inplace, parallax_axis
@@ -258,19 +259,21 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
         return None
     keys = [_mesh_key(o) if method == "mesh" else None for o in mesh_options]
     use_trust = silhouettes and len(views) == 2
+    quant = [o.get("quantization") if o.get("quantization") is not None else quantization_of(v)
+             for v, o in zip(views, mesh_options)]
     raw = [_source(v).raw for v in views]
     if interpolation == "linear" and raw[0].dtype == np.uint8 and raw[0].shape[2] == 3 and np.dtype(dtype) == np.uint8:
         # 8-bit colour: cv2.remap's four-channel SIMD path samples colour + trust, then one pass
         got = [_source(v).rgbt(k, use_trust) for v, k in zip(views, keys)]
         layers = [scratch((slot, "rgbt"), (*camera.shape, 4), np.uint8) for slot in "ab"[:len(views)]]
         return remap_composite([g[0] for g in got], maps, weights, mode=composite_mode, depth_tol=depth_tol,
-                               rims=[g[1] for g in got] if use_trust else None, layers=layers)
+                               rims=[g[1] for g in got] if use_trust else None, layers=layers, quantization=quant)
     trust = None
     if use_trust:
         trust = [_source(v).trust(k) for v, k in zip(views, keys)]
     if interpolation == "linear":  # fused numba pass (no layer images, no OpenCV thread pool)
         return sample_composite(raw, maps, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype,
-                                trust=trust)
+                                trust=trust, quantization=quant)
     colors = [_source(v).color for v in views]
     layers = []
     for m, c, slot in zip(maps, colors, "ab"):
@@ -279,7 +282,8 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
                             m.coverage))
     if trust is not None:
         trust = [sample_maps(np.ascontiguousarray(t[..., :1]), m.map_u, m.map_v)[..., 0] for t, m in zip(trust, maps)]
-    return composite(layers, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype, trust=trust)
+    return composite(layers, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype, trust=trust,
+                     quantization=quant)
 
 
 def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
