@@ -41,7 +41,8 @@ def _pool() -> ThreadPoolExecutor:
 def run_bands(kernel, n: int, *args, min_rows: int = 16, pieces_per_thread: int = 1) -> None:
     """Run ``kernel(start, stop, *args)`` over ``[0, n)`` in pieces of at least ``min_rows``.
 
-    ``kernel`` must release the GIL (``@njit(nogil=True)``) and write only its own rows. With
+    ``kernel`` must release the GIL (``@njit(nogil=True)``, or a Python function whose work is
+    in such kernels and OpenCV calls, which release it too) and write only its own rows. With
     ``pieces_per_thread`` > 1 the pieces are taken in turn by whichever thread is free (uneven
     pieces, e.g. bands of a rasterizer with more quads at the top, balance out); one task per
     extra thread is submitted either way, the calling thread works too. Exceptions of any piece

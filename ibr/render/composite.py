@@ -399,7 +399,8 @@ def rgbt_source(color, trust=None) -> np.ndarray:
 def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: float = 0.02, rims=None,
                     layers=None, quantization=None) -> Composite:
     """:func:`sample_composite` for 8-bit colour: each source is sampled by ``cv2.remap`` (its
-    SIMD path for four 8-bit channels), then the layers are composited in one pass.
+    SIMD path for four 8-bit channels), then the layers are composited, band by band of rows on
+    the :mod:`~ibr.render.bands` pool (each band's layers are composited while still in cache).
 
     Parameters
     ----------
@@ -436,10 +437,7 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
         raise ValueError(f"weights: expected {len(sources)} non-negative finite weights with a positive sum, got {weights!r}")
     w = w / w.sum()
     h, wd = maps[0].depth.shape
-    sampled = []
-    for i, (s, m) in enumerate(zip(sources, maps)):
-        dst = layers[i] if layers is not None else np.empty((h, wd, 4), np.uint8)
-        sampled.append(cv2.remap(s, m.map_u, m.map_v, cv2.INTER_LINEAR, dst=dst, borderMode=cv2.BORDER_REPLICATE))
+    sampled = [layers[i] if layers is not None else np.empty((h, wd, 4), np.uint8) for i in range(len(sources))]
     single = len(sources) == 1
     a, b = (0, 0) if single else ((0, 1) if w[0] >= w[1] else (1, 0))
     wa, wb = (1.0, 0.0) if single else (float(w[a]), float(w[b]))
@@ -455,7 +453,15 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
     coverage = np.empty((h, wd), np.bool_)
     rim = np.empty((h, wd), np.bool_)
     ma, mb = maps[a], maps[b]
-    run_bands(_k.composite_rgbt, h, sampled[a], ma.depth, sampled[b], mb.depth, single, wa, wb, mode == "blend",
-              depth_tol, *_quant_tolerance(quantization), out, depth, coverage, use_trust, ra, ma.map_u, ma.map_v, rb,
-              mb.map_u, mb.map_v, rim)
+    quant0, quant2 = _quant_tolerance(quantization)
+
+    def band(v0, v1):  # sample this band of rows, then composite it while the layers are in cache
+        for src, m, dst in zip(sources, maps, sampled):
+            cv2.remap(src, m.map_u[v0:v1], m.map_v[v0:v1], cv2.INTER_LINEAR, dst=dst[v0:v1],
+                      borderMode=cv2.BORDER_REPLICATE)
+        _k.composite_rgbt(v0, v1, sampled[a], ma.depth, sampled[b], mb.depth, single, wa, wb, mode == "blend",
+                          depth_tol, quant0, quant2, out, depth, coverage, use_trust, ra, ma.map_u, ma.map_v, rb,
+                          mb.map_u, mb.map_v, rim)
+
+    run_bands(band, h)
     return Composite(out, depth, coverage, rim if use_trust and rim.any() else None)
