@@ -58,6 +58,39 @@ def cold_start(rows) -> None:
                  f"warm {times[1]:.1f} s ({times[0] / times[1]:.1f}x); target <= 6 s, warm <= 1.5 s"))
 
 
+#: One command line per CLI command that runs numba kernels, on the bundled data (paths relative
+#: to the clone; outputs under out/)
+FIRST_RUN_COMMANDS = {
+    "interpolate": ["interpolate", "--out", "out/interpolate"],
+    "warp": ["warp", "samples/data/room_a.json", "--to", "samples/data/room_t050.json", "-o", "out/w.png"],
+    "mesh": ["mesh", "samples/data/room_a.json", "--obj", "out/m.obj"],
+    "stereo": ["stereo", "samples/data/room_a.json", "-o", "out/s.png"],
+    "cubemap": ["cubemap", "samples/data/rig/capture_pano_color.png", "-o", "out/faces.png"],
+    "view": ["view", "samples/data/rig/capture_pano_color.png", "-o", "out/v.png", "--yaw", "30"],
+    "stitch": ["stitch", *[f"samples/data/rig/rig_{i:02d}.json" for i in range(10)], "-o", "out/pano.png",
+               "--width", "1024"],
+}
+
+
+def first_runs(rows) -> None:
+    """Each command of FIRST_RUN_COMMANDS as the first command after a fresh install (its own
+    empty numba cache, a fresh clone), then once more (warm)."""
+    with tempfile.TemporaryDirectory(prefix="ibr-first-") as tmp:
+        clone = Path(tmp) / "clone"
+        subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+        for name, argv in FIRST_RUN_COMMANDS.items():
+            env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / f"numba-{name}"), "PYTHONPATH": str(clone)}
+            cmd = [sys.executable, "-c", f"import sys, cli; sys.exit(cli.main({argv!r}))"]
+            times = []
+            for _ in range(2):
+                (clone / "out").mkdir(exist_ok=True)
+                t0 = time.perf_counter()
+                subprocess.run(cmd, cwd=clone, env=env, check=True, capture_output=True)
+                times.append(time.perf_counter() - t0)
+                subprocess.run(["rm", "-rf", str(clone / "out")], check=True)
+            rows.append((f"first `ibr {name}`, fresh clone", f"{times[0]:.1f} s", f"warm {times[1]:.1f} s"))
+
+
 def perspective_rows(rows, quick: bool, repeats: int) -> None:
     import panorama as P
 
@@ -161,7 +194,14 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="smaller sizes, no cold start, few repeats")
     p.add_argument("--repeats", type=int, default=None)
+    p.add_argument("--first-runs", action="store_true",
+                   help="only the first (cold) and second run of each CLI command in a fresh clone")
     args = p.parse_args(argv)
+    if args.first_runs:
+        rows: list[tuple[str, str, str]] = []
+        first_runs(rows)
+        report(rows, ("command", "first run", f"second run (load {os.getloadavg()[0]:.2f})"), RESULTS / "first_runs.txt")
+        return 0
     repeats = args.repeats or (3 if args.quick else 9)
     rows: list[tuple[str, str, str]] = []
     if not args.quick:

@@ -51,7 +51,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import info
+    from commands._common import info, note_first_run
     from commands.interpolate import _metrics, _to_float, _to_png
     from ibr.base.view import View
     from ibr.io import load_view, write_depth, write_image
@@ -65,6 +65,8 @@ def run(args) -> int:
         depth_out = plan.add_file("--depth-out", args.depth_out, (".exr", ".tif", ".tiff", ".pfm"))
         holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
+        if args.method == "mesh":  # the interpolation's kernels: the helper compiles raster and fill
+            note_first_run("ibr.mesh._segment_kernels", "ibr.render._composite_kernels")
 
         view = load_view(args.view)
         target = load_camera(args.to)
