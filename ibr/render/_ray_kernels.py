@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 __all__: list[str] = []
 
@@ -117,11 +117,12 @@ def _rig_point(uu, vv, iv, rot, tr, fx, fy, cx, cy):
             rot[0, 2] * dx + rot[1, 2] * dy + rot[2, 2] * dz)
 
 
-def _setup_rays(rects, planes, src_k, rot, tr, sign, r0, fa, fb, width, height, plane_rig, bbox):
+def _setup_rays(q0, q1, rects, planes, src_k, rot, tr, sign, r0, fa, fb, width, height, plane_rig, bbox):
     """Per quad: rig-frame plane ``[nx, ny, nz, off]`` and target bounds [ulo, vlo, uhi, vhi]
-    (ulo/uhi may lie outside [0, W): columns wrap modulo W). Empty quads get ulo > uhi."""
+    (ulo/uhi may lie outside [0, W): columns wrap modulo W). Empty quads get ulo > uhi. Quads
+    ``q0 .. q1-1`` only (:func:`ibr.render.bands.run_bands` splits them over the threads)."""
     fx, fy, cx, cy = src_k[0], src_k[1], src_k[2], src_k[3]
-    for q in prange(rects.shape[0]):
+    for q in range(q0, q1):
         a, b, c = planes[q, 0], planes[q, 1], planes[q, 2]
         ncx, ncy, ncz = a * fx, b * fy, a * cx + b * cy + c  # n_cam: n_cam . X_s = 1
         # n = R^T n_cam, off = 1 - n_cam . T
@@ -200,8 +201,9 @@ def _setup_rays(rects, planes, src_k, rot, tr, sign, r0, fa, fb, width, height, 
         bbox[q, 0], bbox[q, 1], bbox[q, 2], bbox[q, 3] = ulo, vlo, uhi, vhi
 
 
-setup_rays = njit(cache=True, error_model="numpy", parallel=True)(_setup_rays)
-setup_rays_serial = njit(cache=True, error_model="numpy")(_setup_rays)
+#: compiled serially without the GIL and run in pieces by ibr.render.bands (parallel=True took
+#: 5.7 s to compile on a first ``ibr stitch``, #13)
+setup_rays = njit(cache=True, error_model="numpy", nogil=True)(_setup_rays)
 
 
 @njit(cache=True, error_model="numpy")
@@ -290,8 +292,8 @@ def _clamp(us, vs, cl, ct, cr, cb, su0, sv0, su1, sv1):
     return us, vs
 
 
-def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band_start, band_quads, band_order,
-                 far_coord, v0, v1, colmask, rng, map_u, map_v, coverage):
+def _raster_rays(t0, t1, rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band_start, band_quads,
+                 band_order, far_coord, v0, v1, colmask, rng, map_u, map_v, coverage):
     """Z-buffered ray casting of quads into a spherical camera, one band of rows per task.
 
     rng (H, W) float32 receives the range along each pixel's unit ray from its own origin (NaN
@@ -303,7 +305,7 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
     fx, fy, cx, cy = src_k[0], src_k[1], src_k[2], src_k[3]
     nbands = band_start.shape[0] - 1
     rows_per_band = (height + nbands - 1) // nbands
-    for task in prange(nbands):
+    for task in range(t0, t1):  # tasks t0 .. t1-1 (ibr.render.bands.run_bands hands them out)
         band = band_order[task]
         r0 = band * rows_per_band
         r1 = min(height, r0 + rows_per_band)
@@ -419,5 +421,5 @@ def _raster_rays(rects, plane_rig, bbox, clamp, src_k, rot, tr, rows, cols, band
                     map_v[v, u] = far_coord
 
 
-raster_rays = njit(cache=True, error_model="numpy", parallel=True)(_raster_rays)
-raster_rays_serial = njit(cache=True, error_model="numpy")(_raster_rays)
+#: serial without the GIL, tasks handed out by ibr.render.bands (parallel=True: 6.0 s to compile)
+raster_rays = njit(cache=True, error_model="numpy", nogil=True)(_raster_rays)

@@ -20,12 +20,13 @@ from ..base.ray_camera import SphericalCamera
 from ..base.validate import check_choice, check_positive
 from . import _ray_kernels as _k
 from ._raster_kernels import bucket_bands
+from .bands import run_bands
 from .rasterize import (_FAR, FOOTPRINTS, Layer, SourceMaps, _clamp_flags, _intrinsics, as_float_color, sample_maps,
                         source_color)
 
 __all__ = ["rasterize_mesh_rays", "render_mesh_rays", "rasterize_mesh_rays_reference"]
 
-_PARALLEL_QUADS = 256  # quads (each sampled along its outline) above which setup runs on all threads
+_PARALLEL_QUADS = 256  # quads per piece of the setup (each sampled along its outline) on the band pool
 
 
 def _check_camera(camera) -> SphericalCamera:
@@ -75,9 +76,9 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
     nq = len(mesh.rects)
     plane_rig = np.empty((nq, 4), np.float64)
     bbox = np.empty((nq, 4), np.int32)
-    setup = _k.setup_rays if nq >= _PARALLEL_QUADS else _k.setup_rays_serial
-    setup(mesh.rects, mesh.inv_depth_planes, src_k, rot, tr, camera.sign, 0.5 * camera.ipd,
-          np.radians(camera.fade_start_deg), np.radians(camera.fade_end_deg), w, h, plane_rig, bbox)
+    run_bands(_k.setup_rays, nq, mesh.rects, mesh.inv_depth_planes, src_k, rot, tr, camera.sign, 0.5 * camera.ipd,
+              np.radians(camera.fade_start_deg), np.radians(camera.fade_end_deg), w, h, plane_rig, bbox,
+              min_rows=_PARALLEL_QUADS)
     flags = _clamp_flags(mesh, footprint, depth_tol)
     start, order = bucket_bands(bbox, h, _bands(h))
     if _region is None:
@@ -85,9 +86,10 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
     else:
         v0, v1, colmask = _k.region(bbox, w, h)
         _region[:] = [v0, v1, colmask]
-    _k.raster_rays(mesh.rects, plane_rig, bbox, flags, src_k, rot, tr, _tables(camera, "rows"),
-                   _tables(camera, "cols"), start, order, _band_order(len(start) - 1), _FAR, v0, v1, colmask, out.depth, out.map_u, out.map_v,
-                   out.coverage)
+    nbands = len(start) - 1
+    run_bands(_k.raster_rays, nbands, mesh.rects, plane_rig, bbox, flags, src_k, rot, tr, _tables(camera, "rows"),
+              _tables(camera, "cols"), start, order, _band_order(nbands), _FAR, v0, v1, colmask, out.depth, out.map_u,
+              out.map_v, out.coverage, min_rows=1, pieces_per_thread=nbands)  # one task per piece, taken in turn
     return out
 
 
