@@ -122,11 +122,12 @@ class terminate_as_interrupt:
         return False
 
 
-def note_first_run(*modules: str) -> bool:
+def note_first_run(*modules: str, warm: str = "frame") -> bool:
     """Say before a long first run that numba is compiling (once): when none of ``modules``
     (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet; then
-    also start compiling the rasterizer and the hole fill in a second process
-    (:mod:`ibr.render.warmup`). Returns whether this is such a first run."""
+    also start compiling the kernels ``warm`` names ("frame": the rasterizer and the hole fill;
+    "stitch": the ray rasterizer and the blend) in a second process (:mod:`ibr.render.warmup`).
+    Returns whether this is such a first run."""
     import importlib.util
     import os
 
@@ -145,6 +146,6 @@ def note_first_run(*modules: str) -> bool:
             return False
     from ibr.render.warmup import start_warmup
 
-    start_warmup()
+    start_warmup(warm)
     info("first run: compiling the numba kernels (5-10 s, once; later runs load them from the cache)")
     return True

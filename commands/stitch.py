@@ -139,7 +139,7 @@ def _describe(args, n, seen, panorama) -> str:
 
 def _run_sequences(args) -> int:
     """One rig camera per sequence: frame k stitches view k of every sequence into -o FOLDER."""
-    from commands._common import info, progress
+    from commands._common import info, note_first_run, progress
     from ibr.io import load_view
     from ibr.io.outputs import OutputPlan
     from ibr.sequence import load_sequence
@@ -160,6 +160,7 @@ def _run_sequences(args) -> int:
                 plan.add_view_input("VIEW", v)
         folder = plan.add_folder("-o", args.output, ("pano_*.png",) + (("pano_*_depth.exr",) if depth else ()))
         plan.check()
+        note_first_run("ibr.mesh._segment_kernels", "ibr.render._ray_kernels", warm="stitch")
         for k in progress(range(frames), frames, "stitch frames"):
             views = [load_view(s.views[k]) for s in seqs]
             packed, z, holes, seen = _stitch_frame(args, views, None, None)
@@ -174,7 +175,7 @@ def _run_sequences(args) -> int:
 def run(args) -> int:
     from pathlib import Path
 
-    from commands._common import info, progress
+    from commands._common import info, note_first_run, progress
     from ibr.io import load_view, read_depth, read_image
     from ibr.io.outputs import DEPTH_EXTS, IMAGE_EXTS, OutputPlan
     from ibr.sequence import is_sequence
@@ -194,6 +195,7 @@ def run(args) -> int:
         dep = None if depth_arg == "none" else plan.add_file("--depth-out", depth_arg, DEPTH_EXTS)
         holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
         plan.check()  # every output checked before any work
+        note_first_run("ibr.mesh._segment_kernels", "ibr.render._ray_kernels", warm="stitch")
 
         if args.panorama:
             panorama = (read_image(args.panorama[0], what="--panorama COLOR"),

@@ -38,3 +38,32 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     compiled = out.strip().splitlines()[-1]
     assert "_raster_kernels" not in compiled and "_fill_kernels" not in compiled
     assert "_segment_kernels" in compiled  # the main process still compiles what the helper does not
+
+
+def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):
+    """``python -m ibr.render.warmup stitch`` writes the ray rasterizer's and the blend's cache
+    entries; stitching two bundled rig views afterwards compiles neither (only the segmentation)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
+    subprocess.run([sys.executable, "-m", "ibr.render.warmup", "stitch"], env=env, check=True, timeout=300)
+    cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
+    assert {"_ray_kernels._raster_rays", "_ray_kernels._setup_rays", "_blend_kernels.accumulate_spherical",
+            "_blend_kernels.resolve"} <= cached
+    probe = (
+        "from numba.core import event\n"
+        "done = []\n"
+        "class L(event.Listener):\n"
+        "    def on_start(self, ev): pass\n"
+        "    def on_end(self, ev): done.append(ev.data['dispatcher'].py_func.__module__)\n"
+        "event.register('numba:compile', L())\n"
+        "from ibr.io import load_view\n"
+        "from panorama.stitch import equirect_camera, stitch_rgbd\n"
+        "from samples import DATA_DIR\n"
+        "views = [load_view(DATA_DIR / 'rig' / f'rig_0{i}.json') for i in (0, 1)]\n"
+        "stitch_rgbd(views, equirect_camera(256))\n"
+        "print(sorted(set(done)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", probe], env=env, check=True, timeout=600, capture_output=True,
+                         text=True, cwd=ROOT).stdout
+    compiled = out.strip().splitlines()[-1]
+    assert "_ray_kernels" not in compiled and "_blend_kernels" not in compiled
+    assert "_segment_kernels" in compiled
