@@ -247,7 +247,7 @@ def test_scanline_kernel_matches_reference():
         c = np.zeros_like(color)
         d = np.full((h, w), np.inf, np.float32)
         cov = np.zeros((h, w), bool)
-        scanline_warp(color, z, 50.0, dx, dp, 1.0, c, d, cov)
+        scanline_warp(0, h, color, z, 50.0, dx, dp, 1.0, c, d, cov)
         np.testing.assert_array_equal(cov, ref_cov)
         np.testing.assert_allclose(d[cov], ref_z[cov], rtol=1e-5)
         np.testing.assert_allclose(c[cov], ref_c[cov], atol=1e-5)

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _fill_kernels as _k
+from .bands import run_bands
 from ..base.validate import check_array, check_image, check_positive
 
 __all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous", "fill_pullpush", "parallax_axis"]
@@ -303,5 +304,5 @@ def fill_background_rows(color, depth, coverage) -> tuple[np.ndarray, np.ndarray
     cov = check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b")
     d[~cov] = np.nan
     holes = np.zeros(cov.shape, np.bool_)
-    _k.fill_rows_background(col, d, np.ascontiguousarray(cov), holes)
+    run_bands(_k.fill_rows_background, col.shape[0], col, d, np.ascontiguousarray(cov), holes)
     return col, d, holes

@@ -11,13 +11,13 @@ Dz = 0, so rows are preserved exactly: v' = v).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 __all__: list[str] = []
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, out_cov, is_int=False):
+@njit(cache=True, nogil=True, error_model="numpy")
+def scanline_warp(v0, v1, color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, out_cov, is_int=False):
     """Row-preserving forward mapping with linear interpolation between connected neighbors.
 
     color (H, W, C) any dtype (read as is: uint8 sources move 4x less memory than a float32
@@ -36,7 +36,7 @@ def scanline_warp(color, z, fx, dx, dpixel, max_jump_px, out_color, out_depth, o
     each source pixel's position and inverse depth are computed once per row).
     """
     h, w, nc = color.shape
-    for v in prange(h):
+    for v in range(v0, v1):  # rows v0 .. v1-1: ibr.render.bands.run_bands runs bands on all cores
         xs = np.empty(w)
         izs = np.empty(w)
         ok = np.zeros(w, np.bool_)

@@ -35,6 +35,7 @@ import numpy as np
 
 from . import _pair_kernels as _k
 from ..render import _fill_kernels as _fill_k
+from ..render.bands import run_bands
 from ..base.validate import check_array, check_choice, check_finite_scalar, check_image, check_positive
 from ..base.camera import Camera, camera_from_gl_projection
 from ..base.view import View
@@ -131,7 +132,8 @@ def map_pixels(view: View, *, dx: float, dz: float = 0.0, dpixel: float = 0.0,
         out_c = np.empty((h, w, c), col.dtype if is_int else np.float32)
         out_z = np.empty((h, w), np.float32)
         cov = np.empty((h, w), np.bool_)
-        _k.scanline_warp(col, zz, float(cam.fx), dx, dpixel, float(min(jump, 1e30)), out_c, out_z, cov, is_int)
+        run_bands(_k.scanline_warp, h, col, zz, float(cam.fx), dx, dpixel, float(min(jump, 1e30)), out_c, out_z, cov,
+                  is_int)
     else:
         col = _float_color(view)
         h, w, c = col.shape
@@ -266,7 +268,7 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
             c = np.ascontiguousarray(c, dtype=np.float32)
         d = np.ascontiguousarray(d, dtype=np.float32)
         holes = np.zeros(cov.shape, np.bool_)
-        _fill_k.fill_rows_background(c, d, np.ascontiguousarray(cov), holes)  # in place (fresh arrays)
+        run_bands(_fill_k.fill_rows_background, c.shape[0], c, d, np.ascontiguousarray(cov), holes)  # in place
         out[eye] = (_to_dtype(c, np.asarray(view.color).dtype), d, holes)
     return StereoPair(out["left"][0], out["right"][0], out["left"][2], out["right"][2],
                       out["left"][1], out["right"][1], left_cam, right_cam)
