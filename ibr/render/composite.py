@@ -392,7 +392,9 @@ def rgbt_source(color, trust=None) -> np.ndarray:
         t = np.asarray(trust, np.float32)
         if t.shape != c.shape[:2]:
             raise ValueError(f"trust: expected shape {c.shape[:2]}, got {t.shape}")
-        out[..., 3] = np.rint(np.clip(t, 0.0, 1.0) * 255.0)
+        scaled = np.clip(t, 0.0, 1.0)  # one temporary (peak memory at 1080p, #13)
+        scaled *= 255.0
+        out[..., 3] = np.rint(scaled, out=scaled)
     return out
 
 
