@@ -11,6 +11,23 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _modules_compiled_by(run: str, env) -> str:
+    """The sorted modules of the numba kernels that ``run`` (Python lines) compiles, as printed."""
+    probe = (
+        "from numba.core import event\n"
+        "done = []\n"
+        "class L(event.Listener):\n"
+        "    def on_start(self, ev): pass\n"
+        "    def on_end(self, ev): done.append(ev.data['dispatcher'].py_func.__module__)\n"
+        "event.register('numba:compile', L())\n"
+        + run
+        + "print(sorted(set(done)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", probe], env=env, check=True, timeout=600, capture_output=True,
+                         text=True, cwd=ROOT).stdout
+    return out.strip().splitlines()[-1]
+
+
 def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the rasterizer and the
     fill kernels; a real interpolation afterwards compiles none of those (it loads them)."""
@@ -18,24 +35,12 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     subprocess.run([sys.executable, "-m", "ibr.render.warmup"], env=env, check=True, timeout=300)
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push"} <= cached
-    probe = (
-        "import sys\n"
-        "from numba.core import event\n"
-        "done = []\n"
-        "class L(event.Listener):\n"
-        "    def on_start(self, ev): pass\n"
-        "    def on_end(self, ev): done.append(ev.data['dispatcher'].py_func.__module__)\n"
-        "event.register('numba:compile', L())\n"
+    compiled = _modules_compiled_by(
         "from ibr.io import load_view\n"
         "from ibr.render.view_synthesis import interpolate\n"
         "from samples import DATA_DIR\n"
         "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
-        "interpolate(a, b, 0.5, fill='inpaint')\n"
-        "print(sorted(set(done)))\n"
-    )
-    out = subprocess.run([sys.executable, "-c", probe], env=env, check=True, timeout=600, capture_output=True,
-                         text=True, cwd=ROOT).stdout
-    compiled = out.strip().splitlines()[-1]
+        "interpolate(a, b, 0.5, fill='inpaint')\n", env)
     assert "_raster_kernels" not in compiled and "_fill_kernels" not in compiled
     assert "_segment_kernels" in compiled  # the main process still compiles what the helper does not
 
@@ -48,22 +53,11 @@ def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_ray_kernels._raster_rays", "_ray_kernels._setup_rays", "_blend_kernels.accumulate_spherical",
             "_blend_kernels.resolve"} <= cached
-    probe = (
-        "from numba.core import event\n"
-        "done = []\n"
-        "class L(event.Listener):\n"
-        "    def on_start(self, ev): pass\n"
-        "    def on_end(self, ev): done.append(ev.data['dispatcher'].py_func.__module__)\n"
-        "event.register('numba:compile', L())\n"
+    compiled = _modules_compiled_by(
         "from ibr.io import load_view\n"
         "from panorama.stitch import equirect_camera, stitch_rgbd\n"
         "from samples import DATA_DIR\n"
         "views = [load_view(DATA_DIR / 'rig' / f'rig_0{i}.json') for i in (0, 1)]\n"
-        "stitch_rgbd(views, equirect_camera(256))\n"
-        "print(sorted(set(done)))\n"
-    )
-    out = subprocess.run([sys.executable, "-c", probe], env=env, check=True, timeout=600, capture_output=True,
-                         text=True, cwd=ROOT).stdout
-    compiled = out.strip().splitlines()[-1]
+        "stitch_rgbd(views, equirect_camera(256))\n", env)
     assert "_ray_kernels" not in compiled and "_blend_kernels" not in compiled
     assert "_segment_kernels" in compiled

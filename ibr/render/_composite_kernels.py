@@ -30,6 +30,17 @@ def _agree(a, b, rel_tol, quant0, quant2):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _layer_depths(za, zb, v, u, single):
+    """(a, has_a, b, has_b): the two layers' depths at target pixel (v, u) and whether each
+    covers it (``single``: only layer a exists)."""
+    a = za[v, u]
+    b = np.float32(np.nan)
+    if not single:
+        b = zb[v, u]
+    return a, a > 0.0, b, (not single) and b > 0.0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _trust_weights(wa, wb, ka, kb):
     """Blend weights of two agreeing layers scaled by the fourth power of their trust (1 clean,
     ~0 a mixed silhouette pixel, bilinear in between); a small floor keeps the viewpoint weights
@@ -176,13 +187,7 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
     for v in range(v0, v1):
         for u in range(w):
             rim[v, u] = False
-            a = za[v, u]
-            has_a = a > 0.0
-            b = np.float32(np.nan)
-            has_b = False
-            if not single:
-                b = zb[v, u]
-                has_b = b > 0.0
+            a, has_a, b, has_b = _layer_depths(za, zb, v, u, single)
             if has_a and has_b:
                 if blend and _agree(a, b, rel_tol, quant0, quant2):
                     p0, p1, p2, p3, pax, pay = _taps(sa, ua[v, u], va[v, u])
@@ -232,13 +237,7 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
     for v in range(v0, v1):
         for u in range(w):
             rim[v, u] = False
-            a = za[v, u]
-            has_a = a > 0.0
-            b = np.float32(np.nan)
-            has_b = False
-            if not single:
-                b = zb[v, u]
-                has_b = b > 0.0
+            a, has_a, b, has_b = _layer_depths(za, zb, v, u, single)
             if has_a and has_b:
                 if blend and _agree(a, b, rel_tol, quant0, quant2):
                     xa, xb = wa, wb
