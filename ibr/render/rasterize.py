@@ -185,26 +185,43 @@ def rasterize_mesh(mesh, camera: Camera, *, footprint: str = "free", depth_tol: 
 
 def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out: SourceMaps) -> SourceMaps:
     """:func:`rasterize_mesh` writing into preallocated (H, W) arrays ``out`` (all overwritten)."""
+    return _rasterize_many_into([mesh], camera, footprint, depth_tol, [out])[0]
+
+
+def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: float, outs) -> list:
+    """:func:`_rasterize_into` for several meshes into the same camera, their bands of rows run
+    in one pass of the band pool (one dispatch, and the pieces of all meshes balance out)."""
     check_choice("footprint", footprint, FOOTPRINTS)
     depth_tol = check_positive("depth_tol", depth_tol)
     if not isinstance(camera, Camera):
         raise TypeError(f"camera: expected a Camera, got {type(camera).__name__}")
-    src = mesh.camera
     h, w = camera.height, camera.width
-    r, t = src_from_tgt(src, camera)
     kt = _intrinsics(camera)
     kt_inv = np.linalg.inv(camera.K)
-    nq = len(mesh.rects)
-    coef = np.empty((nq, 12), np.float64)
-    bbox = np.empty((nq, 4), np.int32)
-    run_bands(_k.setup_quads, nq, mesh.rects, mesh.inv_depth_planes, _intrinsics(src), r, t, kt_inv, kt, w, h, coef, bbox,
-              min_rows=4096)  # quads: a piece per thread from 8192 quads on
-    flags = _clamp_flags(mesh, footprint, depth_tol)
-    start, order = _k.bucket_bands(bbox, h, _nbands(h))
-    run_bands(_k.raster_quads, len(start) - 1, mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, out.depth,
-              out.map_u, out.map_v, out.coverage, min_rows=1 if h * w >= _PARALLEL_PIXELS else len(start),
-              pieces_per_thread=4)  # quads crowd some bands: balance them
-    return out
+    jobs = []  # per mesh: (first band, bands, kernel arguments after the band range)
+    first = 0
+    for mesh, out in zip(meshes, outs):
+        r, t = src_from_tgt(mesh.camera, camera)
+        nq = len(mesh.rects)
+        coef = np.empty((nq, 12), np.float64)
+        bbox = np.empty((nq, 4), np.int32)
+        run_bands(_k.setup_quads, nq, mesh.rects, mesh.inv_depth_planes, _intrinsics(mesh.camera), r, t, kt_inv, kt, w,
+                  h, coef, bbox, min_rows=4096)  # quads: a piece per thread from 8192 quads on
+        flags = _clamp_flags(mesh, footprint, depth_tol)
+        start, order = _k.bucket_bands(bbox, h, _nbands(h))
+        jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, out.depth,
+                                             out.map_u, out.map_v, out.coverage)))
+        first += len(start) - 1
+
+    def bands(b0, b1):  # bands b0 .. b1-1 of all meshes, numbered one after the other
+        for off, n, args in jobs:
+            lo, hi = max(b0 - off, 0), min(b1 - off, n)
+            if lo < hi:
+                _k.raster_quads(lo, hi, *args)
+
+    run_bands(bands, first, min_rows=1 if h * w >= _PARALLEL_PIXELS else first,
+              pieces_per_thread=4 * len(jobs))  # quads crowd some bands: balance them
+    return outs
 
 
 _scratch_local = threading.local()
