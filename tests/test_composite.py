@@ -155,12 +155,12 @@ def test_remap_composite_matches_the_exact_sampler_within_a_level():
     from ibr.io import load_view
     from ibr.render.composite import remap_composite, rgbt_source, sample_composite
     from ibr.render.rasterize import SourceMaps
-    from ibr.render.view_synthesis import _maps, _mesh_key, _source
+    from ibr.render.view_synthesis import _mesh_key, _source, _source_maps
     from samples import DATA_DIR
 
     a, b = load_view(DATA_DIR / "clutter_a.json"), load_view(DATA_DIR / "clutter_b.json")
     cam = interpolate_cameras(a.camera, b.camera, 0.5)
-    maps = [_maps(v, cam, "mesh", "free", "", {}, slot) for v, slot in zip((a, b), "ab")]
+    maps = _source_maps((a, b), cam, "mesh", "free", "", ({}, {}))
     w = viewpoint_weights(cam, [a.camera, b.camera])
     packed = [_source(v).trust(_mesh_key({})) for v in (a, b)]
     ref = sample_composite([a.color, b.color], maps, w, dtype=np.uint8, trust=packed)

@@ -27,8 +27,8 @@ from ..base.depth import quantization_of
 from .composite import (COMPOSITE_MODES, composite, mixed_pixels, pack_trust, remap_composite, rgbt_source,
                         sample_composite, source_trust, viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_pullpush_inplace, parallax_axis
-from .rasterize import (FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_into, _rasterize_many_into, as_float_color,
-                        sample_maps, scratch, scratch_maps)
+from .rasterize import (FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_many_into, as_float_color, sample_maps, scratch,
+                        scratch_maps)
 from ..base.view import View
 
 __all__ = [
@@ -239,15 +239,16 @@ def _check_source(view, name: str) -> None:
         )
 
 
-def _maps(view: View, camera: Camera, method: str, footprint: str, splat: str, mesh_options: dict, slot: str):
-    """Where each target pixel samples ``view`` (per-thread scratch buffers of ``slot``, valid
-    until the next call with the same slot; internal use only)."""
+def _source_maps(views, camera: Camera, method: str, footprint: str, splat: str, mesh_options) -> list:
+    """Where each target pixel samples each of ``views`` (``mesh_options``: one dict per view).
+    Meshes are rasterized together into per-thread scratch buffers of slots "a", "b" (valid until
+    the next call; internal use only), all sources' rows in one pass of the band pool."""
     if method == "mesh":
-        return _rasterize_into(source_mesh(view, **mesh_options), camera, footprint, 0.01,
-                               scratch_maps(slot, camera.shape))
+        return _rasterize_many_into([source_mesh(v, **o) for v, o in zip(views, mesh_options)], camera, footprint,
+                                    0.01, [scratch_maps(slot, camera.shape) for slot in "ab"[:len(views)]])
     from .forward import forward_maps
 
-    return forward_maps(view.depth, view.camera, camera, splat=splat)
+    return [forward_maps(v.depth, v.camera, camera, splat=splat) for v in views]
 
 
 def _render(views, camera, weights, *, method, footprint, splat, mesh_options, interpolation, composite_mode,
@@ -255,11 +256,7 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
     """Render one or two sources into ``camera`` and composite them (output arrays are fresh).
     ``mesh_options``: one dict per view. ``silhouettes``: mixed silhouette pixels of each
     source get low trust where the two layers agree (:func:`~ibr.render.composite.source_trust`)."""
-    if method == "mesh":  # all sources' rows in one pass of the band pool
-        maps = _rasterize_many_into([source_mesh(v, **o) for v, o in zip(views, mesh_options)], camera, footprint,
-                                    0.01, [scratch_maps(slot, camera.shape) for slot in "ab"[:len(views)]])
-    else:
-        maps = [_maps(v, camera, method, footprint, splat, o, slot) for v, o, slot in zip(views, mesh_options, "ab")]
+    maps = _source_maps(views, camera, method, footprint, splat, mesh_options)
     if not any(m.coverage.any() for m in maps):
         return None
     keys = [_mesh_key(o) if method == "mesh" else None for o in mesh_options]
