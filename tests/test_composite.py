@@ -191,6 +191,17 @@ def test_remap_composite_matches_the_exact_sampler_within_a_level():
         remap_composite([src[0]], rmaps[:1], [1.0])
     with pytest.raises(ValueError, match="color: expected"):
         rgbt_source(src[0][..., :2])
+    with pytest.raises(ValueError, match=r"trust: expected shape \(20, 30\)"):
+        rgbt_source(src[0], np.ones((20, 31), np.float32))
+    four = [rgbt_source(x) for x in src]
+    with pytest.raises(ValueError, match="weights: expected 2 non-negative finite weights"):
+        remap_composite(four, rmaps, [0.5, -0.5])
+    with pytest.raises(ValueError, match="rims: expected one"):
+        remap_composite(four, rmaps, [0.5, 0.5], rims=[np.zeros((20, 30), bool)])
+    with pytest.raises(ValueError, match="sources, maps: expected 1 or 2 of each"):
+        remap_composite(four, rmaps[:1], [1.0])
+    with pytest.raises(ValueError, match="mode"):
+        remap_composite(four, rmaps, [0.5, 0.5], mode="max")
 
 
 def test_layers_one_quantization_code_apart_blend():
