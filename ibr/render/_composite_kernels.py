@@ -30,14 +30,16 @@ def _agree(a, b, rel_tol, quant0, quant2):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _layer_depths(za, zb, v, u, single):
-    """(a, has_a, b, has_b): the two layers' depths at target pixel (v, u) and whether each
-    covers it (``single``: only layer a exists)."""
-    a = za[v, u]
-    b = np.float32(np.nan)
-    if not single:
-        b = zb[v, u]
-    return a, a > 0.0, b, (not single) and b > 0.0
+def _layer_depths(za_row, zb_row, u, single):
+    """(a, has_a, b, has_b): the two layers' depths at pixel u of a target row and whether each
+    covers it (``single``: only layer a exists; b is then meaningless). Written without a NaN
+    default for b or a short-circuit ``and``: that form made the callers 1.6x slower."""
+    a = za_row[u]
+    b = za_row[u] if single else zb_row[u]
+    has_b = b > 0.0
+    if single:
+        has_b = False
+    return a, a > 0.0, b, has_b
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -185,9 +187,10 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
     the GIL: :func:`ibr.render.bands.run_bands` runs row bands on all cores)."""
     w, nc = out.shape[1], out.shape[2]
     for v in range(v0, v1):
+        zar, zbr = za[v], zb[v]
         for u in range(w):
             rim[v, u] = False
-            a, has_a, b, has_b = _layer_depths(za, zb, v, u, single)
+            a, has_a, b, has_b = _layer_depths(zar, zbr, u, single)
             if has_a and has_b:
                 if blend and _agree(a, b, rel_tol, quant0, quant2):
                     p0, p1, p2, p3, pax, pay = _taps(sa, ua[v, u], va[v, u])
@@ -235,48 +238,61 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
     4-neighbour is a hole (``use_trust`` only). ``out`` (H, W, 3) uint8. Rows ``v0 .. v1-1``."""
     w = out.shape[1]
     for v in range(v0, v1):
+        # row views: with 2-D indexing in the pixel loop (numba cannot tell the arrays apart, so
+        # every store reloads the 3-D strides) the kernel took 1.5x the time
+        lar, lbr, orow = la[v], lb[v], out[v]
+        zar, zbr, drow, crow, rrow = za[v], zb[v], depth[v], coverage[v], rim[v]
         for u in range(w):
-            rim[v, u] = False
-            a, has_a, b, has_b = _layer_depths(za, zb, v, u, single)
+            rrow[u] = False
+            a, has_a, b, has_b = _layer_depths(zar, zbr, u, single)
             if has_a and has_b:
                 if blend and _agree(a, b, rel_tol, quant0, quant2):
                     xa, xb = wa, wb
-                    ta = la[v, u, 3]
-                    tb = lb[v, u, 3]
+                    ta = lar[u, 3]
+                    tb = lbr[u, 3]
                     if use_trust and (ta < 255 or tb < 255):  # a mixed source pixel among the taps
                         xa, xb = _trust_weights(wa, wb, np.float32(ta) * np.float32(1 / 255),
                                                 np.float32(tb) * np.float32(1 / 255))
                     ia = np.int32(xa * 65536.0 + 0.5)  # weights in 1/65536: integer blend, rounded
                     ib = np.int32(65536) - ia  # (float to 8-bit conversions cost twice as much)
-                    for ch in range(3):
-                        out[v, u, ch] = (ia * np.int32(la[v, u, ch]) + ib * np.int32(lb[v, u, ch]) + 32768) >> 16
-                    depth[v, u] = xa * a + xb * b
+                    o0 = (ia * np.int32(lar[u, 0]) + ib * np.int32(lbr[u, 0]) + 32768) >> 16
+                    o1 = (ia * np.int32(lar[u, 1]) + ib * np.int32(lbr[u, 1]) + 32768) >> 16
+                    o2 = (ia * np.int32(lar[u, 2]) + ib * np.int32(lbr[u, 2]) + 32768) >> 16
+                    orow[u, 0] = o0
+                    orow[u, 1] = o1
+                    orow[u, 2] = o2
+                    drow[u] = xa * a + xb * b
                 elif (not blend) or a <= b:
-                    for ch in range(3):
-                        out[v, u, ch] = la[v, u, ch]
-                    depth[v, u] = a
+                    _copy3(orow, lar, u)
+                    drow[u] = a
                 else:
-                    for ch in range(3):
-                        out[v, u, ch] = lb[v, u, ch]
-                    depth[v, u] = b
-                coverage[v, u] = True
+                    _copy3(orow, lbr, u)
+                    drow[u] = b
+                crow[u] = True
             elif has_a:
-                for ch in range(3):
-                    out[v, u, ch] = la[v, u, ch]
-                depth[v, u] = a
-                coverage[v, u] = True
-                rim[v, u] = use_trust and _nearest(ra, ua[v, u], va[v, u]) and _beside_hole(za, zb, v, u)
+                _copy3(orow, lar, u)
+                drow[u] = a
+                crow[u] = True
+                rrow[u] = use_trust and _nearest(ra, ua[v, u], va[v, u]) and _beside_hole(za, zb, v, u)
             elif has_b:
-                for ch in range(3):
-                    out[v, u, ch] = lb[v, u, ch]
-                depth[v, u] = b
-                coverage[v, u] = True
-                rim[v, u] = use_trust and _nearest(rb, ub[v, u], vb[v, u]) and _beside_hole(za, zb, v, u)
+                _copy3(orow, lbr, u)
+                drow[u] = b
+                crow[u] = True
+                rrow[u] = use_trust and _nearest(rb, ub[v, u], vb[v, u]) and _beside_hole(za, zb, v, u)
             else:
-                for ch in range(3):
-                    out[v, u, ch] = 0
-                depth[v, u] = np.nan
-                coverage[v, u] = False
+                orow[u, 0] = 0
+                orow[u, 1] = 0
+                orow[u, 2] = 0
+                drow[u] = np.nan
+                crow[u] = False
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _copy3(dst, src, u):
+    """dst[u, :3] = src[u, :3] (a row of an RGB and of an RGBT layer)."""
+    dst[u, 0] = src[u, 0]
+    dst[u, 1] = src[u, 1]
+    dst[u, 2] = src[u, 2]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
