@@ -99,6 +99,33 @@ def test_kernel_matches_reference_on_random_meshes(seed):
         assert np.isnan(got.depth[~c]).all()
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_large_quads_match_reference_at_grazing_and_wide_views(seed):
+    """Quads spanning many target pixels per row take the kernel's sure-interior path (no
+    per-pixel outline tests one pixel inside the analytic row span): steep planes seen at
+    grazing angles by wide and narrow targets must still cover exactly the reference's pixels."""
+    rng = np.random.default_rng(100 + seed)
+    cam = Camera.from_fov(96, 72, hfov_deg=70)
+    rects = random_partition(rng, 0, 0, cam.width, cam.height, min_size=24, p_stop=0.3)
+    planes = []
+    for u0, v0, u1, v1 in rects:
+        z = rng.uniform(1, 3)
+        a, b = rng.normal(0, 0.01, 2)  # steep: depth changes by up to ~2x across a quad
+        planes.append([a, b, 1 / z - a * (u0 + u1 - 1) / 2 - b * (v0 + v1 - 1) / 2])
+    mesh = mesh_from_rects(cam, rects, planes)
+    wide = rng.uniform(0.15, 0.5) * 96
+    for k in range(3):
+        f = wide if k == 0 else rng.uniform(60, 150)
+        tgt = Camera(f, f, rng.uniform(30, 60), rng.uniform(20, 45), 90, 64, random_pose(rng, scale=0.6, ang=0.5))
+        got = rasterize_mesh(mesh, tgt, footprint="none")
+        ref = rasterize_mesh_reference(mesh, tgt)
+        np.testing.assert_array_equal(got.coverage, ref.coverage)
+        c = got.coverage
+        if c.any():
+            assert np.abs(got.map_u - ref.map_u)[c].max() < 2e-3
+            assert np.max(np.abs(got.depth[c] / ref.depth[c] - 1)) < 1e-5
+
+
 @pytest.mark.parametrize(
     "normal_w, move",
     [

@@ -158,24 +158,35 @@ setup_quads = njit(cache=True, error_model="numpy", nogil=True)(_setup_quads)
 
 
 @njit(cache=True, error_model="numpy")
-def _span(e0, e1, e2, v, strict, lo, hi):
-    """Narrow the integer range [lo, hi] to u with e0*u + e1*v + e2 (>= 0 or > 0 if strict),
-    conservatively (one pixel of slack; the exact test is per pixel)."""
+def _span(e0, e1, e2, v, strict, lo, hi, slo, shi):
+    """Narrow the integer range [lo, hi] to u with e0*u + e1*v + e2 >= 0 (> 0 if strict),
+    conservatively (one pixel of slack; the exact test is per pixel), and [slo, shi] to the u
+    that pass for sure: at least one pixel inside the crossing x = -(e1 v + e2) / e0, where the
+    form is >= |e0| (rounding of x and of the per-pixel form is ~1e-7 |e0| even at the 1e9
+    clamp), so the per-pixel tests can be skipped there with the same result."""
     cst = e1 * v + e2
     if e0 > 0.0:
         x = -cst / e0
         if x == x:  # not NaN
-            b = int(np.floor(max(min(x, 1e9), -1e9))) - 1
-            lo = max(lo, b)
+            b = int(np.floor(max(min(x, 1e9), -1e9)))
+            lo = max(lo, b - 1)
+            slo = max(slo, b + 2)
+        else:
+            shi = slo - 1
     elif e0 < 0.0:
         x = -cst / e0
         if x == x:
-            b = int(np.ceil(max(min(x, 1e9), -1e9))) + 1
-            hi = min(hi, b)
-    else:
+            b = int(np.ceil(max(min(x, 1e9), -1e9)))
+            hi = min(hi, b + 1)
+            shi = min(shi, b - 2)
+        else:
+            shi = slo - 1
+    else:  # the form is cst at every u: all pass or none (cst = 0 or NaN: no pixel is sure)
         if cst < 0.0 or (strict and cst == 0.0):
             hi = lo - 1
-    return lo, hi
+        if not (cst > 0.0):
+            shi = slo - 1
+    return lo, hi, slo, shi
 
 
 @njit(cache=True, error_model="numpy")
@@ -255,13 +266,15 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
             for v in range(max(vlo, r0), min(vhi + 1, r1)):
                 fv = float(v)
                 lo, hi = ulo, uhi
+                slo, shi = 1, 0  # the pixels that pass all six tests for sure (none known)
                 if hi - lo > 6:  # narrow long rows analytically; tiny quads test every pixel
-                    lo, hi = _span(g0, g1, g2, fv, True, lo, hi)
-                    lo, hi = _span(hz0, hz1, hz2, fv, True, lo, hi)
-                    lo, hi = _span(l0, l1, l2, fv, False, lo, hi)
-                    lo, hi = _span(-rr0, -rr1, -rr2, fv, True, lo, hi)
-                    lo, hi = _span(t0, t1, t2, fv, False, lo, hi)
-                    lo, hi = _span(-b0, -b1, -b2, fv, True, lo, hi)
+                    slo, shi = lo, hi
+                    lo, hi, slo, shi = _span(g0, g1, g2, fv, True, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(hz0, hz1, hz2, fv, True, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(l0, l1, l2, fv, False, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(-rr0, -rr1, -rr2, fv, True, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(t0, t1, t2, fv, False, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(-b0, -b1, -b2, fv, True, lo, hi, slo, shi)
                     lo = max(lo, ulo)
                     hi = min(hi, uhi)
                 gv = g1 * fv + g2
@@ -276,12 +289,13 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
                     if not (iz > izrow[u]):
                         continue
                     hz = hz0 * fu + zv
-                    if not (hz > 0.0):
-                        continue
-                    if not (l0 * fu + lv >= 0.0 and rr0 * fu + rv < 0.0):
-                        continue
-                    if not (t0 * fu + tv >= 0.0 and b0 * fu + bv < 0.0):
-                        continue
+                    if u < slo or u > shi:  # near the outline: the exact tests (the fill rule)
+                        if not (hz > 0.0):
+                            continue
+                        if not (l0 * fu + lv >= 0.0 and rr0 * fu + rv < 0.0):
+                            continue
+                        if not (t0 * fu + tv >= 0.0 and b0 * fu + bv < 0.0):
+                            continue
                     ihz = 1.0 / hz  # one division (3 % of the kernel)
                     us = (hx0 * fu + xv) * ihz
                     vs = (hy0 * fu + yv) * ihz
