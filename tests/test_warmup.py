@@ -61,3 +61,15 @@ def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):
         "stitch_rgbd(views, equirect_camera(256))\n", env)
     assert "_ray_kernels" not in compiled and "_blend_kernels" not in compiled
     assert "_segment_kernels" in compiled
+
+
+def test_import_sets_passive_openmp_wait_unless_the_user_chose():
+    """``import ibr`` asks libgomp to let numba's threads sleep after a parallel kernel (#13:
+    spinning threads slowed cv2.remap and the band pool by up to 1.4x); a user's value stays."""
+    code = "import os, ibr; print(os.environ.get('OMP_WAIT_POLICY'))"
+    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    env["PYTHONPATH"] = str(ROOT)
+    run = lambda e: subprocess.run([sys.executable, "-c", code], env=e, check=True, capture_output=True,  # noqa: E731
+                                   text=True, timeout=120).stdout.strip()
+    assert run(env) == "PASSIVE"
+    assert run({**env, "OMP_WAIT_POLICY": "ACTIVE"}) == "ACTIVE"
