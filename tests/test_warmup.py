@@ -32,9 +32,14 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the rasterizer and the
     fill kernels; a real interpolation afterwards compiles none of those (it loads them)."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
-    subprocess.run([sys.executable, "-m", "ibr.render.warmup"], env=env, check=True, timeout=300)
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    subprocess.run([sys.executable, "-m", "ibr.render.warmup", "frame", str(marks)], env=env, check=True, timeout=300)
+    assert sorted(p.name for p in marks.iterdir()) == ["fill", "raster"]  # each group marked once cached
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push"} <= cached
+    # the plane fit and labelling are the main process's (it reaches them first)
+    assert not any(name.startswith("_segment_kernels") for name in cached)
     compiled = _modules_compiled_by(
         "from ibr.io import load_view\n"
         "from ibr.render.view_synthesis import interpolate\n"
@@ -73,3 +78,37 @@ def test_import_sets_passive_openmp_wait_unless_the_user_chose():
                                    text=True, timeout=120).stdout.strip()
     assert run(env) == "PASSIVE"
     assert run({**env, "OMP_WAIT_POLICY": "ACTIVE"}) == "ACTIVE"
+
+
+def test_await_kernels_waits_for_the_helpers_mark_and_no_longer(tmp_path, monkeypatch):
+    """The main process waits for a group the helper is still compiling (instead of compiling it
+    a second time), returns when the mark appears or the helper ends, and at once without one."""
+    import threading
+    import time
+
+    from ibr.render import warmup
+
+    monkeypatch.setattr(warmup, "_STARTED", [])
+    monkeypatch.setattr(warmup, "_READY", set())
+    t0 = time.monotonic()
+    warmup.await_kernels("raster")  # no helper: no wait
+    assert time.monotonic() - t0 < 0.1
+    helper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        warmup._STARTED.append((helper, tmp_path))
+        threading.Timer(0.3, (tmp_path / "raster").touch).start()
+        t0 = time.monotonic()
+        warmup.await_kernels("raster")
+        waited = time.monotonic() - t0
+        assert 0.25 <= waited < warmup.MAX_WAIT_S
+        assert (tmp_path / "raster").exists()
+        t0 = time.monotonic()
+        warmup.await_kernels("raster")  # awaited before: at once
+        assert time.monotonic() - t0 < 0.1
+        threading.Timer(0.3, helper.kill).start()  # the helper dies without marking "fill"
+        t0 = time.monotonic()
+        warmup.await_kernels("fill")
+        assert 0.25 <= time.monotonic() - t0 < warmup.MAX_WAIT_S
+    finally:
+        helper.kill()
+        helper.wait()

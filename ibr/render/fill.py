@@ -27,6 +27,7 @@ import numpy as np
 
 from . import _fill_kernels as _k
 from .bands import run_bands
+from .warmup import await_kernels
 from ..base.validate import check_array, check_image, check_positive
 
 __all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous", "fill_pullpush", "parallax_axis"]
@@ -222,6 +223,7 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
     rows, cols = np.flatnonzero(holes.any(axis=1)), np.flatnonzero(holes.any(axis=0))
     if rows.size == 0:
         return filled
+    await_kernels("fill")  # a first run: the helper may be caching the fill kernels right now
     # work on the holes' bounding box plus CONTEXT_PX (few small holes: a small pyramid)
     v0, v1 = max(rows[0] - CONTEXT_PX, 0), min(rows[-1] + 1 + CONTEXT_PX, holes.shape[0])
     u0, u1 = max(cols[0] - CONTEXT_PX, 0), min(cols[-1] + 1 + CONTEXT_PX, holes.shape[1])

@@ -30,6 +30,7 @@ import numpy as np
 
 from . import _raster_kernels as _k
 from .bands import run_bands
+from .warmup import await_kernels
 from ..base.validate import check_choice, check_image, check_positive
 from ..base.camera import Camera
 
@@ -198,6 +199,7 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
     h, w = camera.height, camera.width
     kt = _intrinsics(camera)
     kt_inv = np.linalg.inv(camera.K)
+    await_kernels("raster")  # a first run: the helper may be caching the raster kernels right now
     jobs = []  # per mesh: (first band, bands, kernel arguments after the band range)
     first = 0
     for mesh, out in zip(meshes, outs):

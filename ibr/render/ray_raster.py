@@ -21,6 +21,7 @@ from ..base.validate import check_choice, check_positive
 from . import _ray_kernels as _k
 from ._raster_kernels import bucket_bands
 from .bands import run_bands
+from .warmup import await_kernels
 from .rasterize import (_FAR, FOOTPRINTS, Layer, SourceMaps, _clamp_flags, _intrinsics, as_float_color, sample_maps,
                         source_color)
 
@@ -73,6 +74,7 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
                          np.empty((h, w), np.bool_))
     rot, tr = src_from_rig(mesh.camera, camera)
     src_k = _intrinsics(mesh.camera)
+    await_kernels("stitch")  # a first run: the helper may be caching the ray kernels right now
     nq = len(mesh.rects)
     plane_rig = np.empty((nq, 4), np.float64)
     bbox = np.empty((nq, 4), np.int32)

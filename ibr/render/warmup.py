@@ -3,34 +3,48 @@
 numba compiles each kernel the first time it is called, one after the other, on one core: a
 fresh install's first ``ibr interpolate`` spent ~9 s compiling (segmentation 3.6 s, rasterizer
 2.2 s, compositor 1.6 s, hole fill 1.8 s) while the second core idled. :func:`start_warmup`
-starts ``python -m ibr.render.warmup``, which calls the mesh's plane fit and labelling, the
-rasterizer and then the hole fill on a tiny scene with the argument types of a real run (uint8
-colour, float32 depth, the mesh's read-only arrays), so they land in numba's on-disk cache while
-the main process compiles the segmentation's splitting and the compositor; when the main process
+starts ``python -m ibr.render.warmup``, which calls the rasterizer and then the hole fill on a
+tiny scene with the argument types of a real run (uint8 colour, float32 depth, the mesh's
+read-only arrays), so they land in numba's on-disk cache while the main process compiles the
+segmentation (splitting, plane fit, labelling) and the compositor; when the main process
 reaches them it loads them from the cache instead. ``python -m ibr.render.warmup stitch`` does the
 same for ``ibr stitch`` (ray rasterizer and N-source blend into a spherical camera). Nothing here
 is needed for correctness: if the helper is slow or fails, the main process compiles what it needs
 itself.
+
+The helper marks each group of kernels it has cached (a file per group in a directory of this
+run); :func:`await_kernels` lets the main process wait for a group the helper is still compiling
+instead of compiling the same kernel a second time on the other core. Without that, the main
+process reached the rasterizer 0.3 s before the helper had cached it and compiled it again (1.2 s),
+then did the same with the fill (#13).
 """
 
 from __future__ import annotations
 
 import atexit
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
+import time
+from pathlib import Path
 
 import numpy as np
 
-__all__ = ["start_warmup", "warm_frame_kernels", "warm_stitch_kernels"]
+__all__ = ["await_kernels", "start_warmup", "warm_frame_kernels", "warm_stitch_kernels"]
 
-_STARTED: list = []
+_STARTED: list = []  # (helper process, marker directory) once started
+_READY: set = set()  # groups this process no longer waits for
+#: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
+#: compiles the kernels itself (an overloaded machine, a helper stuck on its imports).
+MAX_WAIT_S = 15.0
 
 
-def warm_frame_kernels() -> None:
-    """Call the mesh's plane fit and labelling (the last segmentation steps), the rasterizer and
-    the hole fill once on a tiny scene (types as in a real run), in the order the main process
-    will need them after its own segmentation kernels."""
+def warm_frame_kernels(marks: Path | None = None) -> None:
+    """Call the rasterizer and the hole fill once on a tiny scene (types as in a real run), in
+    the order the main process will need them after its own segmentation kernels; mark groups
+    "raster" and "fill" in the directory ``marks`` as they land in the cache."""
     from ..base.camera import Camera
     from .fill import _fill_pullpush_inplace
     from .rasterize import rasterize_mesh
@@ -40,25 +54,25 @@ def warm_frame_kernels() -> None:
     moved = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h,
                    np.array([[1, 0, 0, 0.3], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]))
     rasterize_mesh(mesh, moved)
+    _mark(marks, "raster")
     color = np.full((h, w, 3), 128, np.uint8)
     depth = np.full((h, w), 3.0, np.float32)
     holes = np.zeros((h, w), np.bool_)
     holes[8:12, 10:20] = True
     depth[holes] = np.nan
     _fill_pullpush_inplace(color, depth, holes, axis=0)
+    _mark(marks, "fill")
 
 
 def _tiny_mesh():
-    """A 32 x 24 source of two quads (a step from z = 2 to z = 4), the argument types of a real
-    mesh (the mesh's plane fit and labelling compiled on the way)."""
+    """A 32 x 24 source of two quads (a step from z = 2 to z = 4) with the argument types of a
+    real mesh, built by hand: the plane fit and labelling are left to the main process, which
+    reaches them right after its segmentation (compiling them here too made this helper the
+    last to finish, #13)."""
     from ..base.camera import Camera
-    from ..mesh._segment_kernels import fit_planes_inv_depth, label_rects
     from ..mesh.quad_mesh import QuadMesh
 
     h, w = 24, 32
-    seg_rects = np.array([[0, 0, w, h]], np.int32)
-    fit_planes_inv_depth(np.full((h, w), 0.5), seg_rects)
-    label_rects(seg_rects, h, w)
     cam = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h)
     rects = np.array([[0, 0, w // 2, h], [w // 2, 0, w, h]], np.int32)
     planes = np.array([[0.0, 0.0, 0.5], [0.0, 0.0, 0.25]])
@@ -67,14 +81,34 @@ def _tiny_mesh():
     return QuadMesh(cam, rects, planes, qop, {})
 
 
-def warm_stitch_kernels() -> None:
+def warm_stitch_kernels(marks: Path | None = None) -> None:
     """Blend the tiny mesh into a small equirect ray camera (what ``ibr stitch`` runs after its
-    segmentation): ray setup and raster, the spherical accumulation and the resolve."""
+    segmentation): ray setup and raster, the spherical accumulation and the resolve (group
+    "stitch")."""
     from ..base.ray_camera import SphericalCamera
     from .blend import blend_sources
 
     mesh = _tiny_mesh()
     blend_sources([(mesh, np.full((24, 32, 3), 128, np.uint8))], SphericalCamera(64, 32))
+    _mark(marks, "stitch")
+
+
+def _mark(marks: Path | None, group: str) -> None:
+    if marks is not None:
+        (marks / group).touch()
+
+
+def await_kernels(group: str) -> None:
+    """Wait until the first-run helper has cached kernel group ``group`` ("raster", "fill",
+    "stitch"), while it runs and at most :data:`MAX_WAIT_S`; at once when no helper was started
+    (every run but a first one) or the group was awaited before."""
+    if not _STARTED or group in _READY:
+        return
+    proc, marks = _STARTED[0]
+    deadline = time.monotonic() + MAX_WAIT_S
+    while not (marks / group).exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    _READY.add(group)
 
 
 def start_warmup(kind: str = "frame") -> None:
@@ -82,20 +116,25 @@ def start_warmup(kind: str = "frame") -> None:
     rasterizer and blend) once per process (quietly; killed at exit if still running)."""
     if _STARTED or os.environ.get("NUMBA_DISABLE_JIT") or os.environ.get("IBR_NO_WARMUP"):
         return
+    marks = Path(tempfile.mkdtemp(prefix="ibr-warmup-"))
     try:
-        proc = subprocess.Popen([sys.executable, "-m", "ibr.render.warmup", kind], stdin=subprocess.DEVNULL,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        proc = subprocess.Popen([sys.executable, "-m", "ibr.render.warmup", kind, str(marks)],
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError:
+        shutil.rmtree(marks, ignore_errors=True)
         return
-    _STARTED.append(proc)
-    atexit.register(_stop, proc)
+    _STARTED.append((proc, marks))
+    atexit.register(_stop, proc, marks)
 
 
-def _stop(proc) -> None:
+def _stop(proc, marks: Path) -> None:
     if proc.poll() is None:
         proc.kill()
         proc.wait()
+    shutil.rmtree(marks, ignore_errors=True)
 
 
 if __name__ == "__main__":
-    warm_stitch_kernels() if sys.argv[1:] == ["stitch"] else warm_frame_kernels()
+    _kind = sys.argv[1] if len(sys.argv) > 1 else "frame"
+    _marks = Path(sys.argv[2]) if len(sys.argv) > 2 else None
+    warm_stitch_kernels(_marks) if _kind == "stitch" else warm_frame_kernels(_marks)
