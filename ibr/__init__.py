@@ -22,7 +22,8 @@ from ._lazy import lazy_exports
 # cores they take the CPU from OpenCV's threads and from ibr's band pool working next (cv2.remap
 # 1.4x slower right after the panorama's parallel map kernel, #13). Waiting passively puts them
 # to sleep instead (waking them costs microseconds per kernel). Read by libgomp when numba
-# first loads it, which is after this import; a user's own setting wins.
+# first loads it, which is after this import unless the program ran a parallel numba kernel
+# before importing ibr (then the setting has no effect: README); a user's own setting wins.
 _os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 __version__ = "0.1.0"

@@ -126,6 +126,23 @@ def test_large_quads_match_reference_at_grazing_and_wide_views(seed):
             assert np.max(np.abs(got.depth[c] / ref.depth[c] - 1)) < 1e-5
 
 
+def test_row_span_bounds_for_degenerate_forms():
+    """The analytic row bounds (and the pixels sure to pass) of the rasterizer for forms that are
+    constant along the row or not finite: what the per-pixel test would do at every u."""
+    from ibr.render._raster_kernels import _span
+
+    lo, hi, slo, shi = _span(np.nan, 0.0, 1.0, 3.0, True, 0, 100, 0, 100)  # NaN * u + 1: fails
+    assert hi < lo and shi < slo
+    lo, hi, slo, shi = _span(0.0, 0.0, 1.0, 3.0, True, 0, 100, 0, 100)  # 1 > 0 everywhere
+    assert (lo, hi, slo, shi) == (0, 100, 0, 100)
+    lo, hi, slo, shi = _span(0.0, 0.0, 0.0, 3.0, False, 0, 100, 0, 100)  # 0 >= 0 passes, not "sure"
+    assert (lo, hi) == (0, 100) and shi < slo
+    lo, hi, slo, shi = _span(0.0, 0.0, 0.0, 3.0, True, 0, 100, 0, 100)  # 0 > 0 fails
+    assert hi < lo and shi < slo
+    lo, hi, slo, shi = _span(1.0, 0.0, -10.5, 3.0, True, 0, 100, 0, 100)  # u > 10.5
+    assert lo <= 11 and slo >= 11 and slo <= 13 and (hi, shi) == (100, 100)
+
+
 @pytest.mark.parametrize(
     "normal_w, move",
     [

@@ -95,7 +95,10 @@ def test_await_kernels_waits_for_the_helpers_mark_and_no_longer(tmp_path, monkey
     assert time.monotonic() - t0 < 0.1
     helper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
     try:
-        warmup._STARTED.append((helper, tmp_path))
+        warmup._STARTED.append((helper, tmp_path, warmup.GROUPS["frame"], os.getpid()))
+        t0 = time.monotonic()
+        warmup.await_kernels("stitch")  # not a group of this helper: no wait
+        assert time.monotonic() - t0 < 0.1
         threading.Timer(0.3, (tmp_path / "raster").touch).start()
         t0 = time.monotonic()
         warmup.await_kernels("raster")
@@ -110,5 +113,47 @@ def test_await_kernels_waits_for_the_helpers_mark_and_no_longer(tmp_path, monkey
         warmup.await_kernels("fill")
         assert 0.25 <= time.monotonic() - t0 < warmup.MAX_WAIT_S
     finally:
+        helper.kill()
+        helper.wait()
+
+
+def test_a_forked_child_leaves_the_helper_and_its_marks_alone(tmp_path, monkeypatch):
+    """A child forked from the main process (a pool worker) inherits the helper's record and the
+    exit hook: it must neither wait for the marks nor remove the parent's marker directory."""
+    import time
+
+    from ibr.render import warmup
+
+    if not hasattr(os, "fork"):
+        return
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    helper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    pid = 0
+    try:
+        monkeypatch.setattr(warmup, "_STARTED", [(helper, marks, warmup.GROUPS["frame"], os.getpid())])
+        monkeypatch.setattr(warmup, "_READY", set())
+        monkeypatch.setattr(warmup, "MAX_WAIT_S", 60.0)
+        pid = os.fork()
+        if pid == 0:  # the child: await, then the exit hook as the parent registered it
+            try:
+                warmup.await_kernels("raster")
+                (tmp_path / "returned").touch()
+                warmup._stop(helper, marks, warmup._STARTED[0][3])
+            finally:
+                os._exit(0)
+        deadline = time.monotonic() + 30
+        while pid and time.monotonic() < deadline:
+            if os.waitpid(pid, os.WNOHANG)[0]:
+                pid = 0  # reaped
+            else:
+                time.sleep(0.05)
+        assert (tmp_path / "returned").exists()  # did not wait for the parent's helper
+        assert marks.is_dir()
+        assert helper.poll() is None  # still running: only its owner stops it
+    finally:
+        if pid:  # a child still waiting after 30 s
+            os.kill(pid, 9)
+            os.waitpid(pid, 0)
         helper.kill()
         helper.wait()

@@ -181,11 +181,14 @@ def _span(e0, e1, e2, v, strict, lo, hi, slo, shi):
             shi = min(shi, b - 2)
         else:
             shi = slo - 1
-    else:  # the form is cst at every u: all pass or none (cst = 0 or NaN: no pixel is sure)
+    elif e0 == 0.0:  # the form is cst at every u: all pass or none (cst = 0 or NaN: no pixel is sure)
         if cst < 0.0 or (strict and cst == 0.0):
             hi = lo - 1
         if not (cst > 0.0):
             shi = slo - 1
+    else:  # e0 NaN (an overflowed quad): every exact test fails
+        hi = lo - 1
+        shi = slo - 1
     return lo, hi, slo, shi
 
 

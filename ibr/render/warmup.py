@@ -34,7 +34,9 @@ import numpy as np
 
 __all__ = ["await_kernels", "start_warmup", "warm_frame_kernels", "warm_stitch_kernels"]
 
-_STARTED: list = []  # (helper process, marker directory) once started
+_STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
+#: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
+GROUPS = {"frame": ("raster", "fill"), "stitch": ("stitch",)}
 _READY: set = set()  # groups this process no longer waits for
 #: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
 #: compiles the kernels itself (an overloaded machine, a helper stuck on its imports).
@@ -95,7 +97,10 @@ def warm_stitch_kernels(marks: Path | None = None) -> None:
 
 def _mark(marks: Path | None, group: str) -> None:
     if marks is not None:
-        (marks / group).touch()
+        try:
+            (marks / group).touch()
+        except OSError:  # the main process has gone (and removed the directory): nobody waits
+            pass
 
 
 def await_kernels(group: str) -> None:
@@ -104,7 +109,9 @@ def await_kernels(group: str) -> None:
     (every run but a first one) or the group was awaited before."""
     if not _STARTED or group in _READY:
         return
-    proc, marks = _STARTED[0]
+    proc, marks, groups, owner = _STARTED[0]
+    if group not in groups or os.getpid() != owner:  # not this helper's, or a forked child
+        return
     deadline = time.monotonic() + MAX_WAIT_S
     while not (marks / group).exists() and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.005)
@@ -123,11 +130,13 @@ def start_warmup(kind: str = "frame") -> None:
     except OSError:
         shutil.rmtree(marks, ignore_errors=True)
         return
-    _STARTED.append((proc, marks))
-    atexit.register(_stop, proc, marks)
+    _STARTED.append((proc, marks, GROUPS.get(kind, ()), os.getpid()))
+    atexit.register(_stop, proc, marks, os.getpid())
 
 
-def _stop(proc, marks: Path) -> None:
+def _stop(proc, marks: Path, owner: int) -> None:
+    if os.getpid() != owner:  # a forked child exiting: the helper and its marks are the parent's
+        return
     if proc.poll() is None:
         proc.kill()
         proc.wait()
