@@ -13,6 +13,7 @@ import multiprocessing
 import os
 import shutil
 import signal
+import time
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ import pytest
 import cli
 from ibr.io import read_image, save_view
 from ibr.sequence import load_jobs, run_batch
+from ibr.sequence.jobs import STAGE_PREFIX
 from ibr.synth import camera_path, make_scene, render_path
 
 N_STEREO = 3
@@ -148,9 +150,13 @@ def test_local_pool_survives_a_killed_worker(tmp_path, views, reference):
     killed = []
 
     def kill_one(result):
-        # every worker at the first result: one of them is always inside a job then (a single
-        # victim could be the one that just finished and is idle, which interrupts nothing)
+        # every worker, at the first result, once a job is inside its command (its staging folder
+        # exists): killing at the first result alone could find both workers between jobs (the
+        # first two jobs take the same time, so both finish together), which interrupts nothing
         if not killed:
+            deadline = time.monotonic() + 30
+            while not any(tmp_path.rglob(f"{STAGE_PREFIX}*")) and time.monotonic() < deadline:
+                time.sleep(0.001)
             victims = multiprocessing.active_children()
             assert victims
             for victim in victims:
