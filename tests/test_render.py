@@ -79,24 +79,36 @@ def test_kernel_matches_reference_on_random_meshes(seed):
     """Random partitions with random (also steep) planes, random target poses and intrinsics."""
     rng = np.random.default_rng(seed)
     rects = random_partition(rng, 0, 0, SRC.width, SRC.height, min_size=1, p_stop=0.15)
-    planes = []
-    for u0, v0, u1, v1 in rects:
-        z = rng.uniform(1, 4)
-        a, b = rng.normal(0, 0.004, 2)
-        planes.append([a, b, 1 / z - a * (u0 + u1 - 1) / 2 - b * (v0 + v1 - 1) / 2])
-    mesh = mesh_from_rects(SRC, rects, planes)
+    mesh = mesh_from_rects(SRC, rects, random_planes(rng, rects, (1, 4), 0.004))
     for k in range(4):
         tgt = Camera(rng.uniform(30, 80), rng.uniform(30, 80), rng.uniform(20, 40), rng.uniform(15, 30),
                      56, 40, random_pose(rng, scale=0.8 if k else 2.5))
-        got = rasterize_mesh(mesh, tgt, footprint="none")
-        ref = rasterize_mesh_reference(mesh, tgt)
-        np.testing.assert_array_equal(got.coverage, ref.coverage)
-        c = got.coverage
-        if c.any():
-            assert np.abs(got.map_u - ref.map_u)[c].max() < 2e-3
-            assert np.abs(got.map_v - ref.map_v)[c].max() < 2e-3
-            assert np.max(np.abs(got.depth[c] / ref.depth[c] - 1)) < 1e-5
-        assert np.isnan(got.depth[~c]).all()
+        assert_matches_reference(mesh, tgt)
+
+
+def random_planes(rng, rects, z_range, slope) -> list:
+    """Inverse-depth planes (a, b, c) per rect: depth uniform in ``z_range`` at the rect's centre,
+    gradients normal with deviation ``slope`` (1/z per pixel)."""
+    planes = []
+    for u0, v0, u1, v1 in rects:
+        z = rng.uniform(*z_range)
+        a, b = rng.normal(0, slope, 2)
+        planes.append([a, b, 1 / z - a * (u0 + u1 - 1) / 2 - b * (v0 + v1 - 1) / 2])
+    return planes
+
+
+def assert_matches_reference(mesh, tgt) -> None:
+    """The kernel's maps of ``mesh`` in ``tgt`` against the numpy reference: the same coverage,
+    source coordinates within 2e-3 px, depth within 1e-5, NaN where uncovered."""
+    got = rasterize_mesh(mesh, tgt, footprint="none")
+    ref = rasterize_mesh_reference(mesh, tgt)
+    np.testing.assert_array_equal(got.coverage, ref.coverage)
+    c = got.coverage
+    if c.any():
+        assert np.abs(got.map_u - ref.map_u)[c].max() < 2e-3
+        assert np.abs(got.map_v - ref.map_v)[c].max() < 2e-3
+        assert np.max(np.abs(got.depth[c] / ref.depth[c] - 1)) < 1e-5
+    assert np.isnan(got.depth[~c]).all()
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -107,23 +119,12 @@ def test_large_quads_match_reference_at_grazing_and_wide_views(seed):
     rng = np.random.default_rng(100 + seed)
     cam = Camera.from_fov(96, 72, hfov_deg=70)
     rects = random_partition(rng, 0, 0, cam.width, cam.height, min_size=24, p_stop=0.3)
-    planes = []
-    for u0, v0, u1, v1 in rects:
-        z = rng.uniform(1, 3)
-        a, b = rng.normal(0, 0.01, 2)  # steep: depth changes by up to ~2x across a quad
-        planes.append([a, b, 1 / z - a * (u0 + u1 - 1) / 2 - b * (v0 + v1 - 1) / 2])
-    mesh = mesh_from_rects(cam, rects, planes)
+    mesh = mesh_from_rects(cam, rects, random_planes(rng, rects, (1, 3), 0.01))  # steep: z up to ~2x across
     wide = rng.uniform(0.15, 0.5) * 96
     for k in range(3):
         f = wide if k == 0 else rng.uniform(60, 150)
-        tgt = Camera(f, f, rng.uniform(30, 60), rng.uniform(20, 45), 90, 64, random_pose(rng, scale=0.6, ang=0.5))
-        got = rasterize_mesh(mesh, tgt, footprint="none")
-        ref = rasterize_mesh_reference(mesh, tgt)
-        np.testing.assert_array_equal(got.coverage, ref.coverage)
-        c = got.coverage
-        if c.any():
-            assert np.abs(got.map_u - ref.map_u)[c].max() < 2e-3
-            assert np.max(np.abs(got.depth[c] / ref.depth[c] - 1)) < 1e-5
+        assert_matches_reference(mesh, Camera(f, f, rng.uniform(30, 60), rng.uniform(20, 45), 90, 64,
+                                              random_pose(rng, scale=0.6, ang=0.5)))
 
 
 def test_row_span_bounds_for_degenerate_forms():
