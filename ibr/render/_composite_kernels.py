@@ -269,16 +269,17 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
                     _copy3(orow, lbr, u)
                     drow[u] = b
                 crow[u] = True
-            elif has_a:
-                _copy3(orow, lar, u)
-                drow[u] = a
+            elif has_a or has_b:  # one layer: its sample, and whether it is a rim beside a hole
+                if has_a:
+                    _copy3(orow, lar, u)
+                    drow[u] = a
+                    flags, mu, mv = ra, ua, va
+                else:
+                    _copy3(orow, lbr, u)
+                    drow[u] = b
+                    flags, mu, mv = rb, ub, vb
                 crow[u] = True
-                rrow[u] = use_trust and _nearest(ra, ua[v, u], va[v, u]) and _beside_hole(za, zb, v, u)
-            elif has_b:
-                _copy3(orow, lbr, u)
-                drow[u] = b
-                crow[u] = True
-                rrow[u] = use_trust and _nearest(rb, ub[v, u], vb[v, u]) and _beside_hole(za, zb, v, u)
+                rrow[u] = use_trust and _nearest(flags, mu[v, u], mv[v, u]) and _beside_hole(za, zb, v, u)
             else:
                 orow[u, 0] = 0
                 orow[u, 1] = 0
