@@ -75,7 +75,16 @@ def refit(mesh, view, q):
     return QuadMesh(mesh.camera, mesh.rects, pl, mesh.quad_of_pixel, dict(mesh.info)), n
 
 name = sys.argv[1]
-a, b, truths = be.load_pair(name)
+if name in ("room", "clutter", "grazing"):
+    a, b, truths = be.load_pair(name)
+else:  # another synthetic scene: its bundled camera pair, truths rendered here
+    from ibr.base.camera import interpolate_cameras
+    from ibr.synth import make_scene, render, scene_cameras
+    scene = make_scene(name)
+    ca, cb = scene_cameras(name)
+    a, b = (render(scene, c, supersample=3, name=n) for c, n in ((ca, "a"), (cb, "b")))
+    truths = [render(scene, interpolate_cameras(ca, cb, t), supersample=3, name=f"t{t}") for t in (0.25, 0.5, 0.75)]
+    a, b = (View(v.color, np.where(np.isfinite(v.depth), v.depth, np.nan).astype(np.float32), v.camera, v.name) for v in (a, b))
 cams = [g.camera for g in truths]
 base = float(np.linalg.norm(a.camera.position - b.camera.position)); f = a.camera.fx
 if ENC == "disp":
