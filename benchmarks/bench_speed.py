@@ -3,6 +3,8 @@ the same run (the machine is shared and noisy), plus the peak memory of a 1080p 
 
     flock /tmp/ibr-bench.lock python benchmarks/bench_speed.py            # full (with the cold start)
     python benchmarks/bench_speed.py --quick                              # smaller, no cold start
+    python benchmarks/bench_speed.py --first-runs                         # each CLI command cold and warm
+    python benchmarks/bench_speed.py --timeline interpolate               # who compiles what, when
     ibr bench speed
 
 Rows: first ``ibr interpolate`` from a fresh clone (numba compiling) vs the same command warm;
@@ -90,6 +92,93 @@ def first_runs(rows) -> None:
                 times.append(time.perf_counter() - t0)
                 shutil.rmtree(clone / "out")
             rows.append((f"first `ibr {name}`, fresh clone", f"{times[0]:.1f} s", f"warm {times[1]:.1f} s"))
+
+
+#: Written as ``sitecustomize.py`` on the PYTHONPATH of a ``--timeline`` run, so that the main
+#: process and the warm-up helper (which inherits the environment) both log numba's outermost
+#: compile events, with times since the run's start, to TIMELINE_DIR/<pid>.txt.
+_TIMELINE_HOOK = """
+import atexit, os, sys, time
+_t0 = float(os.environ["IBR_TIMELINE_T0"])
+_log = [(time.time() - _t0, time.time() - _t0, "start " + " ".join(sys.argv[1:2]))]
+from numba.core import event as _ev
+_open = []
+class _L(_ev.Listener):
+    def on_start(self, e):
+        _open.append(time.time())
+    def on_end(self, e):
+        t = _open.pop()
+        if not _open:
+            f = e.data["dispatcher"].py_func
+            _log.append((t - _t0, time.time() - _t0, f.__module__.rsplit(".", 1)[-1] + "." + f.__name__))
+_ev.register("numba:compile", _L())
+def _dump():
+    _log.append((time.time() - _t0, time.time() - _t0, "exit"))
+    with open(os.path.join(os.environ["IBR_TIMELINE_DIR"], f"{os.getpid()}.txt"), "w") as fh:
+        fh.writelines(repr(r) + "\\n" for r in _log)
+atexit.register(_dump)
+"""
+
+
+def timeline(name: str) -> None:
+    """One first run of ``ibr NAME`` (FIRST_RUN_COMMANDS) from a fresh clone and cache, with every
+    process's numba compilations on a time line: printed (compiles of 0.1 s or more) and drawn
+    to results/timeline_NAME.png. Importing numba in the hook adds ~0.3 s to each process."""
+    import ast
+
+    argv = FIRST_RUN_COMMANDS[name]
+    with tempfile.TemporaryDirectory(prefix="ibr-timeline-") as tmp:
+        tmp = Path(tmp)
+        clone, hook, logs = tmp / "clone", tmp / "hook", tmp / "logs"
+        subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+        hook.mkdir()
+        logs.mkdir()
+        (hook / "sitecustomize.py").write_text(_TIMELINE_HOOK)
+        (clone / "out").mkdir()
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp / "numba"), "PYTHONPATH": f"{hook}{os.pathsep}{clone}",
+               "IBR_TIMELINE_DIR": str(logs), "IBR_TIMELINE_T0": repr(time.time())}
+        subprocess.run([sys.executable, "-c", f"import sys, cli; sys.exit(cli.main({argv!r}))"], cwd=clone, env=env,
+                       check=True, capture_output=True)
+        procs = [[ast.literal_eval(line) for line in f.read_text().splitlines()] for f in sorted(logs.iterdir())]
+    procs.sort(key=lambda events: events[0][0])  # the main process started first
+    lines = []
+    for k, events in enumerate(procs):
+        label = "main" if k == 0 else f"helper ({events[0][2].split(' ', 1)[-1]})"
+        compiled = sum(b - a for a, b, what in events if what != "exit" and not what.startswith("start"))
+        lines.append(f"{label}: start {events[0][0]:.2f} s, exit {events[-1][0]:.2f} s, compiling {compiled:.2f} s")
+        lines += [f"  {a:6.2f}-{b:6.2f} s ({b - a:4.2f}) {what}" for a, b, what in events[1:-1] if b - a >= 0.1]
+    print("\n".join(lines))
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / f"timeline_{name}.txt").write_text("\n".join(lines) + "\n")
+    _draw_timeline(procs, RESULTS / f"timeline_{name}.png", f"first `ibr {name}`: numba compiles per process")
+
+
+def _draw_timeline(procs, path: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    modules = sorted({what.split(".")[0] for events in procs for _, _, what in events[1:-1]})
+    colour = {m: f"C{i % 10}" for i, m in enumerate(modules)}  # one colour per kernel module
+    fig, ax = plt.subplots(figsize=(10, 1.6 + 0.6 * len(procs)))
+    for k, events in enumerate(procs):
+        y = len(procs) - 1 - k
+        ax.plot([events[0][0], events[-1][0]], [y, y], color="0.5", lw=1)  # the process's life
+        for a, b, what in events[1:-1]:
+            ax.barh(y, b - a, left=a, height=0.5, color=colour[what.split(".")[0]], edgecolor="k", lw=0.3)
+            if b - a >= 0.5:
+                ax.text((a + b) / 2, y, what.split(".")[-1], ha="center", va="center", fontsize=6)
+    from matplotlib.patches import Patch
+
+    ax.legend(handles=[Patch(color=colour[m], label=m.lstrip("_")) for m in modules], loc="upper center",
+              bbox_to_anchor=(0.5, -0.35), ncol=len(modules), fontsize=7, frameon=False)
+    ax.set_yticks(range(len(procs)), ["main" if k == 0 else "helper" for k in range(len(procs))][::-1])
+    ax.set_xlabel("seconds since start")
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
 
 
 def perspective_rows(rows, quick: bool, repeats: int) -> None:
@@ -197,7 +286,13 @@ def main(argv=None) -> int:
     p.add_argument("--repeats", type=int, default=None)
     p.add_argument("--first-runs", action="store_true",
                    help="only the first (cold) and second run of each CLI command in a fresh clone")
+    p.add_argument("--timeline", choices=sorted(FIRST_RUN_COMMANDS), metavar="COMMAND",
+                   help="one first run of this CLI command with each process's numba compilations on a time "
+                        "line (printed, and drawn to results/timeline_COMMAND.png)")
     args = p.parse_args(argv)
+    if args.timeline:
+        timeline(args.timeline)
+        return 0
     if args.first_runs:
         rows: list[tuple[str, str, str]] = []
         first_runs(rows)
