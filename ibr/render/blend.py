@@ -30,6 +30,7 @@ from . import _blend_kernels as _k
 from .rasterize import _mesh_inv_depth, as_float_color, rasterize_mesh, scratch
 from .ray_raster import rasterize_mesh_rays
 from .rasterize import SourceMaps
+from .warmup import await_kernels
 
 __all__ = ["Blended", "blend_sources", "edge_confidence", "prefilter_sigma", "source_prior"]
 
@@ -239,6 +240,7 @@ def blend_sources(sources: Sequence, camera, *, rel_tol: float = 0.02, sigma_deg
 
             region = [0, -1, None]
             rasterize_mesh_rays(mesh, camera, footprint=footprint, out=maps, _region=region)
+            await_kernels("blend")  # a first run: the helper may be caching the blend kernels right now
             center = (camera.world_from_rig[:3, :3].T @ (mesh.camera.position - camera.world_from_rig[:3, 3]))
             _k.accumulate_spherical(col, source_prior(mesh), maps.map_u, maps.map_v, maps.depth,
                                     _tables(camera, "rows"), _tables(camera, "cols"), np.ascontiguousarray(center),

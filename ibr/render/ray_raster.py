@@ -74,7 +74,7 @@ def rasterize_mesh_rays(mesh, camera: SphericalCamera, *, footprint: str = "free
                          np.empty((h, w), np.bool_))
     rot, tr = src_from_rig(mesh.camera, camera)
     src_k = _intrinsics(mesh.camera)
-    await_kernels("stitch")  # a first run: the helper may be caching the ray kernels right now
+    await_kernels("ray-setup")  # a first run: the helper may be caching the setup kernels right now
     nq = len(mesh.rects)
     plane_rig = np.empty((nq, 4), np.float64)
     bbox = np.empty((nq, 4), np.int32)

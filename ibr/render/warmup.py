@@ -8,7 +8,8 @@ tiny scene with the argument types of a real run (uint8 colour, float32 depth, t
 read-only arrays), so they land in numba's on-disk cache while the main process compiles the
 segmentation (splitting, plane fit, labelling) and the compositor; when the main process
 reaches them it loads them from the cache instead. ``python -m ibr.render.warmup stitch`` does the
-same for ``ibr stitch`` (ray rasterizer and N-source blend into a spherical camera). Nothing here
+same for ``ibr stitch`` (the ray rasterizer's setup and the N-source blend into a spherical
+camera; the main process compiles the ray raster kernel itself). Nothing here
 is needed for correctness: if the helper is slow or fails, the main process compiles what it needs
 itself.
 
@@ -36,7 +37,7 @@ __all__ = ["await_kernels", "start_warmup", "warm_frame_kernels", "warm_stitch_k
 
 _STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
 #: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
-GROUPS = {"frame": ("raster", "fill"), "stitch": ("stitch",)}
+GROUPS = {"frame": ("raster", "fill"), "stitch": ("ray-setup", "blend")}
 _READY: set = set()  # groups this process no longer waits for
 #: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
 #: compiles the kernels itself (an overloaded machine, a helper stuck on its imports).
@@ -84,15 +85,47 @@ def _tiny_mesh():
 
 
 def warm_stitch_kernels(marks: Path | None = None) -> None:
-    """Blend the tiny mesh into a small equirect ray camera (what ``ibr stitch`` runs after its
-    segmentation): ray setup and raster, the spherical accumulation and the resolve (group
-    "stitch")."""
+    """The kernels ``ibr stitch`` runs after its segmentation, but one: the ray rasterizer's setup
+    (setup, bucketing, region; group "ray-setup"), then the spherical accumulation and the resolve
+    of the blend (group "blend"), on the tiny mesh and a small equirect ray camera. The ray raster
+    kernel itself is left to the main process, which reaches it when its segmentation is done
+    (compiling the whole chain here kept the main process waiting 4 s, #13): here it is skipped
+    for the setup and replaced by the numpy reference for the blend."""
     from ..base.ray_camera import SphericalCamera
-    from .blend import blend_sources
+    from . import _ray_kernels, blend
+    from .ray_raster import rasterize_mesh_rays, rasterize_mesh_rays_reference
+    from .rasterize import SourceMaps
 
     mesh = _tiny_mesh()
-    blend_sources([(mesh, np.full((24, 32, 3), 128, np.uint8))], SphericalCamera(64, 32))
-    _mark(marks, "stitch")
+    camera = SphericalCamera(64, 32)
+    h, w = camera.shape
+    maps = SourceMaps(*(np.empty((h, w), np.float32) for _ in range(3)), np.empty((h, w), np.bool_))
+    raster_rays = _ray_kernels.raster_rays
+    _ray_kernels.raster_rays = _skip
+    try:
+        rasterize_mesh_rays(mesh, camera, out=maps, _region=[0, -1, None])
+    finally:
+        _ray_kernels.raster_rays = raster_rays
+    _mark(marks, "ray-setup")
+
+    def reference_rays(mesh, camera, *, footprint, out, _region):
+        ref = rasterize_mesh_rays_reference(mesh, camera)
+        for name in ("depth", "map_u", "map_v", "coverage"):
+            getattr(out, name)[...] = getattr(ref, name)
+        _region[:] = [0, camera.shape[0] - 1, np.ones(camera.shape[1], np.uint8)]  # the types of _k.region's
+        return out
+
+    rays = blend.rasterize_mesh_rays
+    blend.rasterize_mesh_rays = reference_rays
+    try:
+        blend.blend_sources([(mesh, np.full((24, 32, 3), 128, np.uint8))], camera)
+    finally:
+        blend.rasterize_mesh_rays = rays
+    _mark(marks, "blend")
+
+
+def _skip(*args) -> None:
+    """Stands in for a kernel whose compilation is left to the main process."""
 
 
 def _mark(marks: Path | None, group: str) -> None:
@@ -104,8 +137,8 @@ def _mark(marks: Path | None, group: str) -> None:
 
 
 def await_kernels(group: str) -> None:
-    """Wait until the first-run helper has cached kernel group ``group`` ("raster", "fill",
-    "stitch"), while it runs and at most :data:`MAX_WAIT_S`; at once when no helper was started
+    """Wait until the first-run helper has cached kernel group ``group`` (:data:`GROUPS`), while it
+    runs and at most :data:`MAX_WAIT_S`; at once when no helper was started
     (every run but a first one) or the group was awaited before."""
     if not _STARTED or group in _READY:
         return
