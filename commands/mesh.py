@@ -39,7 +39,7 @@ def run(args) -> int:
     import time
     from pathlib import Path
 
-    from commands._common import info
+    from commands._common import info, note_first_run
     from ibr.base.validate import check_image_size
     from ibr.io import load_view, write_image
     from ibr.io.mesh_files import write_obj, write_ply, write_segmentation_png
@@ -60,6 +60,7 @@ def run(args) -> int:
         if obj:
             mtl = plan.add_file("--obj (its material file)", obj.with_suffix(".mtl"), (".mtl",))
         plan.check()  # every output checked before any work (#12)
+        note_first_run("ibr.mesh._segment_kernels", warm="mesh")
 
         view = load_view(args.view)
         if viz:

@@ -77,6 +77,27 @@ def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):
     assert any(k.startswith("_segment_kernels") for k in compiled)
 
 
+def test_the_mesh_helper_fills_the_cache_a_real_mesh_uses(tmp_path):
+    """``python -m ibr.render.warmup mesh`` caches the split's plane tests, the plane fit and the
+    labelling with the argument types of a real segmentation: building a mesh afterwards
+    compiles none of them, only the edge prefix and the split (the main process's share)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    subprocess.run([sys.executable, "-m", "ibr.render.warmup", "mesh", str(marks)], env=env, check=True, timeout=300)
+    assert sorted(p.name for p in marks.iterdir()) == ["segment"]
+    compiled = _kernels_compiled_by(
+        "from ibr.io import load_view\n"
+        "from ibr.mesh import build_mesh\n"
+        "from samples import DATA_DIR\n"
+        "build_mesh(load_view(DATA_DIR / 'room_a.json'))\n", env)
+    ours = [k for k in compiled if k.startswith("_segment_kernels")]
+    assert "_segment_kernels.split_edges" in ours and "_segment_kernels._edge_prefix_kernel" in ours
+    for kernel in ("_quick_reject", "rect_fit_within", "_crease_split_cached", "_profile_cache",
+                   "fit_planes_inv_depth", "label_rects"):
+        assert f"_segment_kernels.{kernel}" not in ours
+
+
 def test_import_sets_passive_openmp_wait_unless_the_user_chose():
     """``import ibr`` asks libgomp to let numba's threads sleep after a parallel kernel (#13:
     spinning threads slowed cv2.remap and the band pool by up to 1.4x); a user's value stays."""
@@ -95,7 +116,7 @@ def test_await_kernels_waits_for_the_helpers_mark_and_no_longer(tmp_path, monkey
     import threading
     import time
 
-    from ibr.render import warmup
+    from ibr.base import first_run as warmup
 
     monkeypatch.setattr(warmup, "_STARTED", [])
     monkeypatch.setattr(warmup, "_READY", set())
@@ -131,7 +152,7 @@ def test_a_forked_child_leaves_the_helper_and_its_marks_alone(tmp_path, monkeypa
     exit hook: it must neither wait for the marks nor remove the parent's marker directory."""
     import time
 
-    from ibr.render import warmup
+    from ibr.base import first_run as warmup
 
     if not hasattr(os, "fork"):
         return

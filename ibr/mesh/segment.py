@@ -48,6 +48,7 @@ import numpy as np
 from . import _segment_kernels as _k
 from ..base.validate import check_array, check_choice, check_positive
 from ..base.depth import ZPRIME_SCALE, zprime_from_z
+from ..base.first_run import await_kernels
 
 __all__ = [
     "METHODS",
@@ -416,6 +417,7 @@ def split_rects(
             hb, vb = _break_edges_reference(z, bthr)
             return _split_edges_reference(z, invalid, hb, vb, tol, 0, CREASE_PEAK)
         ch, rv = _k.edge_prefix(z, bthr)
+        await_kernels("segment")  # a first `ibr mesh`: the helper may be caching the split's callees
         return _k.split_edges(z, ch, rv, tol, 0, CREASE_PEAK)
     invalid = (~np.isfinite(z)).astype(np.uint8)
     if reference:

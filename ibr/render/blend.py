@@ -30,7 +30,7 @@ from . import _blend_kernels as _k
 from .rasterize import _mesh_inv_depth, as_float_color, rasterize_mesh, scratch
 from .ray_raster import rasterize_mesh_rays
 from .rasterize import SourceMaps
-from .warmup import await_kernels
+from ..base.first_run import await_kernels
 
 __all__ = ["Blended", "blend_sources", "edge_confidence", "prefilter_sigma", "source_prior"]
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from . import _fill_kernels as _k
 from .bands import run_bands
-from .warmup import await_kernels
+from ..base.first_run import await_kernels
 from ..base.validate import check_array, check_image, check_positive
 
 __all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous", "fill_pullpush", "parallax_axis"]

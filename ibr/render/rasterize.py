@@ -30,7 +30,7 @@ import numpy as np
 
 from . import _raster_kernels as _k
 from .bands import run_bands
-from .warmup import await_kernels
+from ..base.first_run import await_kernels
 from ..base.validate import check_choice, check_image, check_positive
 from ..base.camera import Camera
 

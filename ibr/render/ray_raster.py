@@ -21,7 +21,7 @@ from ..base.validate import check_choice, check_positive
 from . import _ray_kernels as _k
 from ._raster_kernels import bucket_bands
 from .bands import run_bands
-from .warmup import await_kernels
+from ..base.first_run import await_kernels
 from .rasterize import (_FAR, FOOTPRINTS, Layer, SourceMaps, _clamp_flags, _intrinsics, as_float_color, sample_maps,
                         source_color)
 

@@ -9,12 +9,14 @@ read-only arrays), so they land in numba's on-disk cache while the main process 
 segmentation (splitting, plane fit, labelling) and the compositor; when the main process
 reaches them it loads them from the cache instead. ``python -m ibr.render.warmup stitch`` does the
 same for ``ibr stitch`` (the ray rasterizer's setup and the N-source blend into a spherical
-camera; the main process compiles the ray raster kernel itself). Nothing here
+camera; the main process compiles the ray raster kernel itself), ``... mesh`` for ``ibr mesh``
+(the split's plane tests, the plane fit and the labelling). Nothing here
 is needed for correctness: if the helper is slow or fails, the main process compiles what it needs
 itself.
 
 The helper marks each group of kernels it has cached (a file per group in a directory of this
-run); :func:`await_kernels` lets the main process wait for a group the helper is still compiling
+run, :mod:`ibr.base.first_run`); ``await_kernels`` lets the main process wait for a group the
+helper is still compiling
 instead of compiling the same kernel a second time on the other core. Without that, the main
 process reached the rasterizer 0.3 s before the helper had cached it and compiled it again (1.2 s),
 then did the same with the fill (#13).
@@ -22,26 +24,14 @@ then did the same with the fill (#13).
 
 from __future__ import annotations
 
-import atexit
-import os
-import shutil
-import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["await_kernels", "start_warmup", "warm_frame_kernels", "warm_stitch_kernels"]
+from ..base.first_run import await_kernels, mark as _mark, start_helper as start_warmup  # noqa: F401
 
-_STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
-#: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
-GROUPS = {"frame": ("raster", "fill"), "stitch": ("ray-setup", "blend")}
-_READY: set = set()  # groups this process no longer waits for
-#: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
-#: compiles the kernels itself (an overloaded machine, a helper stuck on its imports).
-MAX_WAIT_S = 15.0
+__all__ = ["await_kernels", "start_warmup", "warm_frame_kernels", "warm_mesh_kernels", "warm_stitch_kernels"]
 
 
 def warm_frame_kernels(marks: Path | None = None) -> None:
@@ -124,59 +114,30 @@ def warm_stitch_kernels(marks: Path | None = None) -> None:
     _mark(marks, "blend")
 
 
+def warm_mesh_kernels(marks: Path | None = None) -> None:
+    """For ``ibr mesh``: the kernels the segmentation's split calls (quick reject, plane test,
+    crease split) and the plane fit and labelling, called directly on a small z' image with the
+    argument types of a real run (int32 rect bounds, as popped from the split's stack; float64
+    z'), group "segment". The main process compiles the edge prefix and the split meanwhile."""
+    from ..mesh import _segment_kernels as k
+
+    h, w = 48, 64
+    zp = np.linspace(0.0, 1.0, h * w).reshape(h, w)
+    u0, v0, u1, v1 = np.int32(0), np.int32(0), np.int32(w), np.int32(h)
+    k._quick_reject(zp, u0, v0, u1, v1, 0.1)
+    k.rect_fit_within(zp, u0, v0, u1, v1, 0.1)
+    k._crease_split_cached(zp, u0, v0, u1, v1, 5.0, *k._profile_cache(h, w))
+    rects = np.array([[0, 0, w, h]], np.int32)
+    k.fit_planes_inv_depth(zp, rects)
+    k.label_rects(rects, h, w)
+    _mark(marks, "segment")
+
+
 def _skip(*args) -> None:
     """Stands in for a kernel whose compilation is left to the main process."""
-
-
-def _mark(marks: Path | None, group: str) -> None:
-    if marks is not None:
-        try:
-            (marks / group).touch()
-        except OSError:  # the main process has gone (and removed the directory): nobody waits
-            pass
-
-
-def await_kernels(group: str) -> None:
-    """Wait until the first-run helper has cached kernel group ``group`` (:data:`GROUPS`), while it
-    runs and at most :data:`MAX_WAIT_S`; at once when no helper was started
-    (every run but a first one) or the group was awaited before."""
-    if not _STARTED or group in _READY:
-        return
-    proc, marks, groups, owner = _STARTED[0]
-    if group not in groups or os.getpid() != owner:  # not this helper's, or a forked child
-        return
-    deadline = time.monotonic() + MAX_WAIT_S
-    while not (marks / group).exists() and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.005)
-    _READY.add(group)
-
-
-def start_warmup(kind: str = "frame") -> None:
-    """Start the helper process for ``kind`` ("frame": rasterizer and fill; "stitch": ray
-    rasterizer and blend) once per process (quietly; killed at exit if still running)."""
-    if _STARTED or os.environ.get("NUMBA_DISABLE_JIT") or os.environ.get("IBR_NO_WARMUP"):
-        return
-    marks = Path(tempfile.mkdtemp(prefix="ibr-warmup-"))
-    try:
-        proc = subprocess.Popen([sys.executable, "-m", "ibr.render.warmup", kind, str(marks)],
-                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    except OSError:
-        shutil.rmtree(marks, ignore_errors=True)
-        return
-    _STARTED.append((proc, marks, GROUPS.get(kind, ()), os.getpid()))
-    atexit.register(_stop, proc, marks, os.getpid())
-
-
-def _stop(proc, marks: Path, owner: int) -> None:
-    if os.getpid() != owner:  # a forked child exiting: the helper and its marks are the parent's
-        return
-    if proc.poll() is None:
-        proc.kill()
-        proc.wait()
-    shutil.rmtree(marks, ignore_errors=True)
 
 
 if __name__ == "__main__":
     _kind = sys.argv[1] if len(sys.argv) > 1 else "frame"
     _marks = Path(sys.argv[2]) if len(sys.argv) > 2 else None
-    warm_stitch_kernels(_marks) if _kind == "stitch" else warm_frame_kernels(_marks)
+    {"stitch": warm_stitch_kernels, "mesh": warm_mesh_kernels}.get(_kind, warm_frame_kernels)(_marks)
