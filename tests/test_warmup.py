@@ -85,7 +85,7 @@ def test_the_mesh_helper_fills_the_cache_a_real_mesh_uses(tmp_path):
     marks = tmp_path / "marks"
     marks.mkdir()
     subprocess.run([sys.executable, "-m", "ibr.render.warmup", "mesh", str(marks)], env=env, check=True, timeout=300)
-    assert sorted(p.name for p in marks.iterdir()) == ["segment"]
+    assert sorted(p.name for p in marks.iterdir()) == ["plane-fit", "segment"]
     compiled = _kernels_compiled_by(
         "from ibr.io import load_view\n"
         "from ibr.mesh import build_mesh\n"

@@ -24,7 +24,7 @@ __all__ = ["GROUPS", "MAX_WAIT_S", "await_kernels", "mark", "start_helper"]
 
 _STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
 #: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
-GROUPS = {"frame": ("raster", "fill"), "stitch": ("ray-setup", "blend"), "mesh": ("segment",)}
+GROUPS = {"frame": ("raster", "fill"), "stitch": ("ray-setup", "blend"), "mesh": ("segment", "plane-fit")}
 _READY: set = set()  # groups this process no longer waits for
 #: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
 #: compiles the kernels itself (an overloaded machine, a helper stuck on its imports).

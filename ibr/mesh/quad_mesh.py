@@ -267,8 +267,10 @@ def build_mesh(
 
 
 def _mesh_from_segmentation(camera, depth, seg, t0) -> QuadMesh:
+    from ..base.first_run import await_kernels
     from ._segment_kernels import fit_planes_inv_depth, label_rects
 
+    await_kernels("plane-fit")  # a first `ibr mesh`: the helper may be caching these two right now
     planes = fit_planes_inv_depth(seg.inv_depth, seg.rects)
     h, w = camera.shape
     qop = label_rects(seg.rects, h, w)

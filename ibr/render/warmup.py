@@ -118,7 +118,8 @@ def warm_mesh_kernels(marks: Path | None = None) -> None:
     """For ``ibr mesh``: the kernels the segmentation's split calls (quick reject, plane test,
     crease split) and the plane fit and labelling, called directly on a small z' image with the
     argument types of a real run (int32 rect bounds, as popped from the split's stack; float64
-    z'), group "segment". The main process compiles the edge prefix and the split meanwhile."""
+    z'), groups "segment" and "plane-fit". The main process compiles the edge prefix and the split
+    meanwhile."""
     from ..mesh import _segment_kernels as k
 
     h, w = 48, 64
@@ -127,10 +128,11 @@ def warm_mesh_kernels(marks: Path | None = None) -> None:
     k._quick_reject(zp, u0, v0, u1, v1, 0.1)
     k.rect_fit_within(zp, u0, v0, u1, v1, 0.1)
     k._crease_split_cached(zp, u0, v0, u1, v1, 5.0, *k._profile_cache(h, w))
+    _mark(marks, "segment")  # the split can start; the plane fit is needed only after it
     rects = np.array([[0, 0, w, h]], np.int32)
     k.fit_planes_inv_depth(zp, rects)
     k.label_rects(rects, h, w)
-    _mark(marks, "segment")
+    _mark(marks, "plane-fit")
 
 
 def _skip(*args) -> None:
