@@ -80,6 +80,28 @@ def _quant_tolerance(quantization) -> tuple[float, float]:
     return QUANT_BLEND_CODES * c0, QUANT_BLEND_CODES * c2
 
 
+def _layer_order(weights, n: int) -> tuple[int, int, float, float]:
+    """``weights`` of ``n`` (1 or 2) layers, checked and normalized, as ``(a, b, wa, wb)``: the
+    index and weight of the layer with the larger weight first (the nearer source, which the
+    kernels call layer a), then the other; one layer: ``(0, 0, 1.0, 0.0)``."""
+    w = np.asarray(weights, dtype=np.float64).reshape(-1)
+    if w.shape != (n,) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
+        raise ValueError(f"weights: expected {n} non-negative finite weights with a positive sum, got {weights!r}")
+    if n == 1:
+        return 0, 0, 1.0, 0.0
+    w = w / w.sum()
+    a, b = (0, 1) if w[0] >= w[1] else (1, 0)
+    return a, b, float(w[a]), float(w[b])
+
+
+def _sources_and_maps(sources, maps) -> tuple[list, list]:
+    """``sources`` and ``maps`` as lists of one or two each, the same number."""
+    sources, maps = list(sources), list(maps)
+    if not 1 <= len(sources) <= 2 or len(maps) != len(sources):
+        raise ValueError(f"sources, maps: expected 1 or 2 of each, got {len(sources)} and {len(maps)}")
+    return sources, maps
+
+
 def _steps(q: np.ndarray, axis: int, rel: float, ratio: float) -> np.ndarray:
     """Depth discontinuities between neighbours along ``axis`` of inverse depth ``q`` (NaN
     invalid): a valid/invalid pair, or ``|dq| > rel * min(q)`` and ``> ratio`` times the
@@ -268,10 +290,7 @@ def composite(
             raise ValueError(
                 f"layers[{i}]: color shape {layer.color.shape} differs from layers[0]'s {layers[0].color.shape}"
             )
-    w = np.asarray(weights, dtype=np.float64).reshape(-1)
-    if w.shape != (len(layers),) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
-        raise ValueError(f"weights: expected {len(layers)} non-negative finite weights with a positive sum, got {weights!r}")
-    w = w / w.sum()
+    ia, ib, wa, wb = _layer_order(weights, len(layers))
     dtype = np.dtype(dtype)
     is_int = dtype.kind in "ui"
     maxval = float(np.iinfo(dtype).max) if is_int else 0.0
@@ -279,20 +298,14 @@ def composite(
     out = np.empty((h, wd, c), dtype)
     depth = np.empty((h, wd), np.float32)
     coverage = np.empty((h, wd), np.bool_)
-    if len(layers) == 1:
-        a = b = layers[0]
-        wa, wb = 1.0, 0.0
-    else:
-        order = (0, 1) if w[0] >= w[1] else (1, 0)
-        a, b = layers[order[0]], layers[order[1]]
-        wa, wb = float(w[order[0]]), float(w[order[1]])
+    a, b = layers[ia], layers[ib]
     ka = kb = _NO_TRUST_2D
     use_trust = trust is not None and len(layers) == 2
     if use_trust:
         k = [np.ascontiguousarray(t, np.float32) for t in trust]
         if len(k) != 2 or any(t.shape != (h, wd) for t in k):
             raise ValueError(f"trust: expected 2 arrays of shape {(h, wd)}, got {[t.shape for t in k]}")
-        ka, kb = k[order[0]], k[order[1]]
+        ka, kb = k[ia], k[ib]
     _k.composite2(a.color, a.depth, b.color, b.depth, wa, wb, mode == "blend", depth_tol,
                   *_quant_tolerance(quantization),
                   is_int, maxval, out, depth, coverage, use_trust, ka, kb)
@@ -337,13 +350,9 @@ def sample_composite(
     """
     check_choice("mode", mode, COMPOSITE_MODES)
     depth_tol = check_positive("depth_tol", depth_tol)
-    sources, maps = list(sources), list(maps)
-    if not 1 <= len(sources) <= 2 or len(maps) != len(sources):
-        raise ValueError(f"sources, maps: expected 1 or 2 of each, got {len(sources)} and {len(maps)}")
-    w = np.asarray(weights, dtype=np.float64).reshape(-1)
-    if w.shape != (len(sources),) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
-        raise ValueError(f"weights: expected {len(sources)} non-negative finite weights with a positive sum, got {weights!r}")
-    w = w / w.sum()
+    sources, maps = _sources_and_maps(sources, maps)
+    a, b, wa, wb = _layer_order(weights, len(sources))
+    single = len(sources) == 1
     for i, s in enumerate(sources):
         if s.ndim != 3 or s.shape[2] != sources[0].shape[2] or s.dtype != sources[0].dtype:
             raise ValueError(f"sources[{i}]: expected (H, W, C) with C = {sources[0].shape[2]} and dtype "
@@ -355,12 +364,6 @@ def sample_composite(
     out = np.empty((h, wd, sources[0].shape[2]), dtype)
     depth = np.empty((h, wd), np.float32)
     coverage = np.empty((h, wd), np.bool_)
-    if len(sources) == 1:
-        a = b = 0
-        wa, wb, single = 1.0, 0.0, True
-    else:
-        a, b = (0, 1) if w[0] >= w[1] else (1, 0)
-        wa, wb, single = float(w[a]), float(w[b]), False
     ma, mb = maps[a], maps[b]
     ka = kb = _NO_TRUST
     use_trust = trust is not None and not single
@@ -428,21 +431,14 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
     """
     check_choice("mode", mode, COMPOSITE_MODES)
     depth_tol = check_positive("depth_tol", depth_tol)
-    sources, maps = list(sources), list(maps)
-    if not 1 <= len(sources) <= 2 or len(maps) != len(sources):
-        raise ValueError(f"sources, maps: expected 1 or 2 of each, got {len(sources)} and {len(maps)}")
+    sources, maps = _sources_and_maps(sources, maps)
     for i, s in enumerate(sources):
         if s.ndim != 3 or s.shape[2] != 4 or s.dtype != np.uint8:
             raise ValueError(f"sources[{i}]: expected (H, W, 4) uint8 (rgbt_source), got {s.dtype} {s.shape}")
-    w = np.asarray(weights, dtype=np.float64).reshape(-1)
-    if w.shape != (len(sources),) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
-        raise ValueError(f"weights: expected {len(sources)} non-negative finite weights with a positive sum, got {weights!r}")
-    w = w / w.sum()
+    a, b, wa, wb = _layer_order(weights, len(sources))
+    single = len(sources) == 1
     h, wd = maps[0].depth.shape
     sampled = [layers[i] if layers is not None else np.empty((h, wd, 4), np.uint8) for i in range(len(sources))]
-    single = len(sources) == 1
-    a, b = (0, 0) if single else ((0, 1) if w[0] >= w[1] else (1, 0))
-    wa, wb = (1.0, 0.0) if single else (float(w[a]), float(w[b]))
     use_trust = rims is not None and not single
     ra = rb = _NO_RIM
     if use_trust:
