@@ -145,8 +145,8 @@ def note_first_run(*modules: str, warm: str = "frame") -> bool:
                   else list(Path(cache_dir).glob(f"{path.parent.name}_*")))
         if any(c.is_dir() and any(c.glob(f"{path.stem}.*.nbi")) for c in caches):
             return False
-    from ibr.render.warmup import start_warmup
+    from ibr.base.first_run import start_helper
 
-    start_warmup(warm)
+    start_helper(warm)
     info("first run: compiling the numba kernels (5-10 s, once; later runs load them from the cache)")
     return True

@@ -127,7 +127,7 @@ def test_await_kernels_waits_for_the_helpers_mark_and_no_longer(tmp_path, monkey
     try:
         warmup._STARTED.append((helper, tmp_path, warmup.GROUPS["frame"], os.getpid()))
         t0 = time.monotonic()
-        warmup.await_kernels("stitch")  # not a group of this helper: no wait
+        warmup.await_kernels("blend")  # not a group of this helper: no wait
         assert time.monotonic() - t0 < 0.1
         threading.Timer(0.3, (tmp_path / "raster").touch).start()
         t0 = time.monotonic()
@@ -145,6 +145,20 @@ def test_await_kernels_waits_for_the_helpers_mark_and_no_longer(tmp_path, monkey
     finally:
         helper.kill()
         helper.wait()
+
+
+def test_first_run_refuses_unknown_groups_and_kinds(monkeypatch):
+    """A misspelt group or helper kind is an error on every run (not a silent no-wait)."""
+    import pytest
+
+    from ibr.base import first_run
+
+    monkeypatch.setattr(first_run, "_STARTED", [])
+    with pytest.raises(ValueError, match="group"):
+        first_run.await_kernels("rastre")
+    with pytest.raises(ValueError, match="kind"):
+        first_run.start_helper("frames")
+    assert first_run._STARTED == []  # nothing was started for the refused kind
 
 
 def test_a_forked_child_leaves_the_helper_and_its_marks_alone(tmp_path, monkeypatch):

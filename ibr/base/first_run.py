@@ -20,11 +20,14 @@ import tempfile
 import time
 from pathlib import Path
 
+from .validate import check_choice
+
 __all__ = ["GROUPS", "MAX_WAIT_S", "await_kernels", "mark", "start_helper"]
 
 _STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
 #: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
 GROUPS = {"frame": ("raster", "fill"), "stitch": ("ray-setup", "blend"), "mesh": ("segment", "plane-fit")}
+_ALL_GROUPS = tuple(sorted({g for groups in GROUPS.values() for g in groups}))
 _READY: set = set()  # groups this process no longer waits for
 #: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
 #: compiles the kernels itself (an overloaded machine, a helper stuck on its imports).
@@ -32,6 +35,7 @@ MAX_WAIT_S = 15.0
 
 
 def mark(marks: Path | None, group: str) -> None:
+    """In the helper: say that ``group``'s kernels are in the cache (``marks`` None: no one asked)."""
     if marks is not None:
         try:
             (marks / group).touch()
@@ -43,6 +47,8 @@ def await_kernels(group: str) -> None:
     """Wait until the first-run helper has cached kernel group ``group`` (:data:`GROUPS`), while it
     runs and at most :data:`MAX_WAIT_S`; at once when no helper was started
     (every run but a first one) or the group was awaited before."""
+    if group not in _ALL_GROUPS:  # checked on every run, so that a misspelt group shows at once
+        check_choice("group", group, _ALL_GROUPS)
     if not _STARTED or group in _READY:
         return
     proc, marks, groups, owner = _STARTED[0]
@@ -55,8 +61,11 @@ def await_kernels(group: str) -> None:
 
 
 def start_helper(kind: str = "frame") -> None:
-    """Start the helper process for ``kind`` ("frame": rasterizer and fill; "stitch": ray
-    rasterizer and blend) once per process (quietly; killed at exit if still running)."""
+    """Start the helper process for ``kind`` (a key of :data:`GROUPS`: "frame" for the rasterizer
+    and the fill, "stitch" for the ray rasterizer's setup and the blend, "mesh" for the
+    segmentation's plane tests and plane fit) once per process (quietly; killed at exit if still
+    running)."""
+    check_choice("kind", kind, tuple(GROUPS))
     if _STARTED or os.environ.get("NUMBA_DISABLE_JIT") or os.environ.get("IBR_NO_WARMUP"):
         return
     marks = Path(tempfile.mkdtemp(prefix="ibr-warmup-"))

@@ -2,9 +2,9 @@
 
 numba compiles each kernel the first time it is called, one after the other, on one core: a
 fresh install's first ``ibr interpolate`` spent ~9 s compiling (segmentation 3.6 s, rasterizer
-2.2 s, compositor 1.6 s, hole fill 1.8 s) while the second core idled. :func:`start_warmup`
-starts ``python -m ibr.render.warmup``, which calls the rasterizer and then the hole fill on a
-tiny scene with the argument types of a real run (uint8 colour, float32 depth, the mesh's
+2.2 s, compositor 1.6 s, hole fill 1.8 s) while the second core idled.
+:func:`ibr.base.first_run.start_helper` starts ``python -m ibr.render.warmup``, which calls the
+rasterizer and then the hole fill on a tiny scene with the argument types of a real run (uint8 colour, float32 depth, the mesh's
 read-only arrays), so they land in numba's on-disk cache while the main process compiles the
 segmentation (splitting, plane fit, labelling) and the compositor; when the main process
 reaches them it loads them from the cache instead. ``python -m ibr.render.warmup stitch`` does the
@@ -29,9 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..base.first_run import await_kernels, mark as _mark, start_helper as start_warmup  # noqa: F401
+from ..base.first_run import mark as _mark
 
-__all__ = ["await_kernels", "start_warmup", "warm_frame_kernels", "warm_mesh_kernels", "warm_stitch_kernels"]
+__all__ = ["warm_frame_kernels", "warm_mesh_kernels", "warm_stitch_kernels"]
 
 
 def warm_frame_kernels(marks: Path | None = None) -> None:
