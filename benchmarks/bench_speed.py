@@ -45,22 +45,6 @@ def _remap_floor(h: int, w: int, src: np.ndarray):
     return lambda: cv2.remap(src, mx, my, cv2.INTER_LINEAR)
 
 
-def cold_start(rows) -> None:
-    """First and second ``ibr interpolate`` on the bundled pair in a fresh clone and cache."""
-    with tempfile.TemporaryDirectory(prefix="ibr-cold-") as tmp:
-        clone = Path(tmp) / "clone"
-        subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
-        env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba"), "PYTHONPATH": str(clone)}
-        cmd = [sys.executable, "-c", "import sys, cli; sys.exit(cli.main(['interpolate', '--out', 'out']))"]
-        times = []
-        for _ in range(2):
-            t0 = time.perf_counter()
-            subprocess.run(cmd, cwd=clone, env=env, check=True, capture_output=True)
-            times.append(time.perf_counter() - t0)
-    rows.append(("first `ibr interpolate`, fresh clone", f"{times[0]:.1f} s",
-                 f"warm {times[1]:.1f} s ({times[0] / times[1]:.1f}x); target <= 6 s, warm <= 1.5 s"))
-
-
 #: One command line per CLI command that runs numba kernels, on the bundled data (paths relative
 #: to the clone; outputs under out/)
 FIRST_RUN_COMMANDS = {
@@ -75,23 +59,47 @@ FIRST_RUN_COMMANDS = {
 }
 
 
+def _fresh_clone(tmp: Path) -> Path:
+    """A clone of this repository's committed state under ``tmp`` (what a new user installs)."""
+    clone = tmp / "clone"
+    subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+    return clone
+
+
+def _cli_command(argv) -> list[str]:
+    return [sys.executable, "-c", f"import sys, cli; sys.exit(cli.main({argv!r}))"]
+
+
+def _cold_and_warm(clone: Path, cache: Path, argv) -> tuple[float, float]:
+    """Seconds of ``ibr ARGV`` in ``clone`` with the empty numba cache folder ``cache`` (a first
+    run after installing), then of the same command again (warm)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": str(clone)}
+    times = []
+    for _ in range(2):
+        (clone / "out").mkdir(exist_ok=True)
+        t0 = time.perf_counter()
+        subprocess.run(_cli_command(argv), cwd=clone, env=env, check=True, capture_output=True)
+        times.append(time.perf_counter() - t0)
+        shutil.rmtree(clone / "out")
+    return times[0], times[1]
+
+
+def cold_start(rows) -> None:
+    """First and second ``ibr interpolate`` on the bundled pair in a fresh clone and cache."""
+    with tempfile.TemporaryDirectory(prefix="ibr-cold-") as tmp:
+        cold, warm = _cold_and_warm(_fresh_clone(Path(tmp)), Path(tmp) / "numba", FIRST_RUN_COMMANDS["interpolate"])
+    rows.append(("first `ibr interpolate`, fresh clone", f"{cold:.1f} s",
+                 f"warm {warm:.1f} s ({cold / warm:.1f}x); target <= 6 s, warm <= 1.5 s"))
+
+
 def first_runs(rows) -> None:
     """Each command of FIRST_RUN_COMMANDS as the first command after a fresh install (its own
     empty numba cache, a fresh clone), then once more (warm)."""
     with tempfile.TemporaryDirectory(prefix="ibr-first-") as tmp:
-        clone = Path(tmp) / "clone"
-        subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+        clone = _fresh_clone(Path(tmp))
         for name, argv in FIRST_RUN_COMMANDS.items():
-            env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / f"numba-{name}"), "PYTHONPATH": str(clone)}
-            cmd = [sys.executable, "-c", f"import sys, cli; sys.exit(cli.main({argv!r}))"]
-            times = []
-            for _ in range(2):
-                (clone / "out").mkdir(exist_ok=True)
-                t0 = time.perf_counter()
-                subprocess.run(cmd, cwd=clone, env=env, check=True, capture_output=True)
-                times.append(time.perf_counter() - t0)
-                shutil.rmtree(clone / "out")
-            rows.append((f"first `ibr {name}`, fresh clone", f"{times[0]:.1f} s", f"warm {times[1]:.1f} s"))
+            cold, warm = _cold_and_warm(clone, Path(tmp) / f"numba-{name}", argv)
+            rows.append((f"first `ibr {name}`, fresh clone", f"{cold:.1f} s", f"warm {warm:.1f} s"))
 
 
 #: Written as ``sitecustomize.py`` on the PYTHONPATH of a ``--timeline`` run, so that the main
@@ -129,16 +137,14 @@ def timeline(name: str) -> None:
     argv = FIRST_RUN_COMMANDS[name]
     with tempfile.TemporaryDirectory(prefix="ibr-timeline-") as tmp:
         tmp = Path(tmp)
-        clone, hook, logs = tmp / "clone", tmp / "hook", tmp / "logs"
-        subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+        clone, hook, logs = _fresh_clone(tmp), tmp / "hook", tmp / "logs"
         hook.mkdir()
         logs.mkdir()
         (hook / "sitecustomize.py").write_text(_TIMELINE_HOOK)
         (clone / "out").mkdir()
         env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp / "numba"), "PYTHONPATH": f"{hook}{os.pathsep}{clone}",
                "IBR_TIMELINE_DIR": str(logs), "IBR_TIMELINE_T0": repr(time.time())}
-        subprocess.run([sys.executable, "-c", f"import sys, cli; sys.exit(cli.main({argv!r}))"], cwd=clone, env=env,
-                       check=True, capture_output=True)
+        subprocess.run(_cli_command(argv), cwd=clone, env=env, check=True, capture_output=True)
         procs = [[ast.literal_eval(line) for line in f.read_text().splitlines()] for f in sorted(logs.iterdir())]
     procs.sort(key=lambda events: events[0][0])  # the main process started first
     lines = []
