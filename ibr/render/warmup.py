@@ -1,29 +1,29 @@
 """Compile the frame kernels in a second process on the first run (issue #13, cold start).
 
-numba compiles each kernel the first time it is called, one after the other, on one core: a
-fresh install's first ``ibr interpolate`` spent ~9 s compiling (segmentation 3.6 s, rasterizer
-2.2 s, compositor 1.6 s, hole fill 1.8 s) while the second core idled.
+numba compiles each kernel the first time it is called, one after the other, on one core: a fresh
+install's first ``ibr interpolate`` spent ~9 s compiling (segmentation 3.6 s, rasterizer 2.2 s,
+compositor 1.6 s, hole fill 1.8 s) while the second core idled.
 :func:`ibr.base.first_run.start_helper` starts ``python -m ibr.render.warmup``, which calls the
-rasterizer and then the hole fill on a tiny scene with the argument types of a real run (uint8 colour, float32 depth, the mesh's
-read-only arrays), so they land in numba's on-disk cache while the main process compiles the
-segmentation (splitting, plane fit, labelling) and the compositor; when the main process
-reaches them it loads them from the cache instead. ``python -m ibr.render.warmup stitch`` does the
-same for ``ibr stitch`` (the ray rasterizer's setup and the N-source blend into a spherical
-camera; the main process compiles the ray raster kernel itself), ``... mesh`` for ``ibr mesh``
-(the split's plane tests, the plane fit and the labelling). Nothing here
-is needed for correctness: if the helper is slow or fails, the main process compiles what it needs
-itself.
+rasterizer and then the hole fill on a tiny scene with the argument types of a real run (uint8
+colour, float32 depth, the mesh's read-only arrays), so they land in numba's on-disk cache while
+the main process compiles the segmentation (splitting, plane fit, labelling) and the compositor;
+when the main process reaches them it loads them from the cache instead. ``python -m
+ibr.render.warmup stitch`` does the same for ``ibr stitch`` (the ray rasterizer's setup and the
+N-source blend into a spherical camera; the main process compiles the ray raster kernel itself),
+``... mesh`` for ``ibr mesh`` (the split's plane tests, the plane fit and the labelling). Nothing
+here is needed for correctness: if the helper is slow or fails, the main process compiles what it
+needs itself.
 
-The helper marks each group of kernels it has cached (a file per group in a directory of this
-run, :mod:`ibr.base.first_run`); ``await_kernels`` lets the main process wait for a group the
-helper is still compiling
-instead of compiling the same kernel a second time on the other core. Without that, the main
-process reached the rasterizer 0.3 s before the helper had cached it and compiled it again (1.2 s),
-then did the same with the fill (#13).
+The helper marks each group of kernels it has cached (a file per group in a directory of this run,
+:mod:`ibr.base.first_run`); ``await_kernels`` lets the main process wait for a group the helper is
+still compiling instead of compiling the same kernel a second time on the other core. Without that,
+the main process reached the rasterizer 0.3 s before the helper had cached it and compiled it again
+(1.2 s), then did the same with the fill (#13).
 """
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from pathlib import Path
 
@@ -90,12 +90,8 @@ def warm_stitch_kernels(marks: Path | None = None) -> None:
     camera = SphericalCamera(64, 32)
     h, w = camera.shape
     maps = SourceMaps(*(np.empty((h, w), np.float32) for _ in range(3)), np.empty((h, w), np.bool_))
-    raster_rays = _ray_kernels.raster_rays
-    _ray_kernels.raster_rays = _skip
-    try:
+    with _replaced(_ray_kernels, "raster_rays", _skip):
         rasterize_mesh_rays(mesh, camera, out=maps, _region=[0, -1, None])
-    finally:
-        _ray_kernels.raster_rays = raster_rays
     _mark(marks, "ray-setup")
 
     def reference_rays(mesh, camera, *, footprint, out, _region):
@@ -105,12 +101,8 @@ def warm_stitch_kernels(marks: Path | None = None) -> None:
         _region[:] = [0, camera.shape[0] - 1, np.ones(camera.shape[1], np.uint8)]  # the types of _k.region's
         return out
 
-    rays = blend.rasterize_mesh_rays
-    blend.rasterize_mesh_rays = reference_rays
-    try:
+    with _replaced(blend, "rasterize_mesh_rays", reference_rays):
         blend.blend_sources([(mesh, np.full((24, 32, 3), 128, np.uint8))], camera)
-    finally:
-        blend.rasterize_mesh_rays = rays
     _mark(marks, "blend")
 
 
@@ -137,6 +129,17 @@ def warm_mesh_kernels(marks: Path | None = None) -> None:
 
 def _skip(*args) -> None:
     """Stands in for a kernel whose compilation is left to the main process."""
+
+
+@contextlib.contextmanager
+def _replaced(module, name: str, value):
+    """``module.name`` is ``value`` inside the block (this helper process only)."""
+    original = getattr(module, name)
+    setattr(module, name, value)
+    try:
+        yield
+    finally:
+        setattr(module, name, original)
 
 
 if __name__ == "__main__":
