@@ -127,7 +127,7 @@ def note_first_run(*modules: str, warm: str = "frame") -> bool:
     (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet; then
     also start compiling the kernels ``warm`` names ("frame": the rasterizer and the hole fill;
     "stitch": the ray rasterizer's setup and the blend; "mesh": the segmentation's plane tests,
-    plane fit and labelling) in a second process (:mod:`ibr.render.warmup`).
+    plane fit) in a second process (:mod:`ibr.render.warmup`).
     Returns whether this is such a first run."""
     import importlib.util
     import os

@@ -15,6 +15,7 @@ import cli
 from ibr import build_mesh, QuadMesh
 from ibr.base.camera import Camera
 from ibr.base.depth import fixed_from_z, z_from_fixed
+from ibr.mesh import segment as S
 from ibr.mesh.quad_mesh import fit_inv_depth_planes, mesh_depth, segmentation_image
 from ibr.io.mesh_files import write_obj, write_ply, write_segmentation_png
 from ibr.base.view import View
@@ -118,6 +119,29 @@ def test_one_pixel_rect_takes_center_depth_and_fit_matches_lstsq():
         zz = z.copy()
         zz[0, 0] = np.nan
         fit_inv_depth_planes(zz, rects)
+    for bad in ([[0, 0, 12, 3]], [[-1, 0, 2, 2]], [[4, 4, 4, 6]], [[0, 5, 3, 10]]):  # outside, empty
+        with pytest.raises(ValueError, match=r"rects: expected non-empty \[u0, v0, u1, v1\] inside the 11x9 image"):
+            fit_inv_depth_planes(z, np.array(bad, np.int32))
+
+
+def test_rect_labels_and_coverage_match_a_plain_loop():
+    """Difference-array labels (no kernel, #13) equal painting each rect; coverage of rects that
+    overlap or leave the image equals painting their parts inside it."""
+    from ibr.mesh import _segment_kernels as K
+
+    rng = np.random.default_rng(4)
+    h, w = 23, 31
+    seg = S.split_rects(rng.random((h, w)), method="paper", threshold=0.5)  # a partition of the image
+    ref = np.full((h, w), -1, np.int32)
+    for i, (u0, v0, u1, v1) in enumerate(seg):
+        ref[v0:v1, u0:u1] = i
+    assert len(seg) > 20 and np.array_equal(K.label_rects(seg, h, w), ref) and (ref >= 0).all()
+    assert np.array_equal(K.label_rects(seg[::3], h, w) >= 0, K.rect_coverage(seg[::3], h, w))
+    rects = rng.integers(-5, 36, (40, 4))
+    cover = np.zeros((h, w), bool)
+    for u0, v0, u1, v1 in rects:
+        cover[max(v0, 0):max(v1, 0), max(u0, 0):max(u1, 0)] = True
+    assert np.array_equal(K.rect_coverage(rects, h, w), cover) and 0 < cover.sum() < h * w
 
 
 def test_quadmesh_validation():

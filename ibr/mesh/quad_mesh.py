@@ -174,15 +174,20 @@ def fit_inv_depth_planes(depth, rects) -> np.ndarray:
 
     q = _inv_depth(depth)
     r = np.ascontiguousarray(rects, dtype=np.int32).reshape(-1, 4)
+    h, w = q.shape
+    inside = (r[:, 0] >= 0) & (r[:, 1] >= 0) & (r[:, 2] <= w) & (r[:, 3] <= h) & (r[:, 0] < r[:, 2]) & (r[:, 1] < r[:, 3])
+    if not inside.all():
+        bad = r[np.argmin(inside)].tolist()
+        raise ValueError(f"rects: expected non-empty [u0, v0, u1, v1] inside the {w}x{h} image, got {bad}")
     if len(r) and not np.isfinite(q[_rect_pixels_mask(r, q.shape)]).all():
         raise ValueError("rects: cover pixels with invalid depth")
     return fit_planes_inv_depth(q, r)
 
 
 def _rect_pixels_mask(rects, shape) -> np.ndarray:
-    from ._segment_kernels import label_rects
+    from ._segment_kernels import rect_coverage
 
-    return label_rects(np.ascontiguousarray(rects, np.int32), shape[0], shape[1]) >= 0
+    return rect_coverage(rects, shape[0], shape[1])
 
 
 def _inv_depth(depth) -> np.ndarray:

@@ -192,32 +192,45 @@ def _span(e0, e1, e2, v, strict, lo, hi, slo, shi):
     return lo, hi, slo, shi
 
 
-@njit(cache=True, error_model="numpy")
 def bucket_bands(bbox, height, nbands):
     """Counting sort of visible quads into horizontal bands of target rows.
 
     Returns (start (nbands + 1,) int64, quads (N,) int32): band k holds quads
     ``quads[start[k]:start[k+1]]`` in increasing quad order (a quad spanning several bands is
-    listed in each)."""
+    listed in each). The arrays are allocated here and filled by two kernels: an allocation inside
+    a kernel cost a first run 0.3 s of compiling (#13)."""
     rows_per_band = (height + nbands - 1) // nbands
     count = np.zeros(nbands + 1, np.int64)
-    nq = bbox.shape[0]
-    for q in range(nq):
+    _count_bands(bbox, rows_per_band, count)
+    quads = np.empty(count[nbands], np.int32)
+    _fill_bands(bbox, rows_per_band, count[:nbands].copy(), quads)
+    return count, quads
+
+
+@njit(cache=True, error_model="numpy")
+def _count_bands(bbox, rows_per_band, count):
+    """``count[k + 1]`` = the number of visible quads whose rows meet band k, then the running
+    sum (``count`` zeroed, (nbands + 1,))."""
+    nbands = count.shape[0] - 1
+    for q in range(bbox.shape[0]):
         if bbox[q, 0] > bbox[q, 2] or bbox[q, 1] > bbox[q, 3]:
             continue
         for k in range(bbox[q, 1] // rows_per_band, bbox[q, 3] // rows_per_band + 1):
             count[k + 1] += 1
     for k in range(nbands):
         count[k + 1] += count[k]
-    quads = np.empty(count[nbands], np.int32)
-    fill = count[:nbands].copy()
-    for q in range(nq):
+
+
+@njit(cache=True, error_model="numpy")
+def _fill_bands(bbox, rows_per_band, fill, quads):
+    """List each visible quad in every band it meets: ``fill[k]`` is band k's next slot in
+    ``quads`` (its start on entry)."""
+    for q in range(bbox.shape[0]):
         if bbox[q, 0] > bbox[q, 2] or bbox[q, 1] > bbox[q, 3]:
             continue
         for k in range(bbox[q, 1] // rows_per_band, bbox[q, 3] // rows_per_band + 1):
             quads[fill[k]] = q
             fill[k] += 1
-    return count, quads
 
 
 def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_start, band_quads, far_coord,
@@ -234,6 +247,9 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
     """
     nbands = band_start.shape[0] - 1
     rows_per_band = (height + nbands - 1) // nbands
+    # _span's strictness as run-time booleans: the literals True / False compiled one _span each,
+    # and int32 bounds a third (0.26 s each on a first run, #13)
+    strict, loose = np.bool_(True), np.bool_(False)
     for band in range(band0, band1):
         r0 = band * rows_per_band
         r1 = min(height, r0 + rows_per_band)
@@ -244,7 +260,7 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
                 izrow[u] = 0.0
         for k in range(band_start[band], band_start[band + 1]):
             q = band_quads[k]
-            ulo, vlo, uhi, vhi = bbox[q, 0], bbox[q, 1], bbox[q, 2], bbox[q, 3]
+            ulo, vlo, uhi, vhi = np.int64(bbox[q, 0]), np.int64(bbox[q, 1]), np.int64(bbox[q, 2]), np.int64(bbox[q, 3])
             g0, g1, g2 = coef[q, 0], coef[q, 1], coef[q, 2]
             hx0, hx1, hx2 = coef[q, 3], coef[q, 4], coef[q, 5]
             hy0, hy1, hy2 = coef[q, 6], coef[q, 7], coef[q, 8]
@@ -272,12 +288,12 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
                 slo, shi = 1, 0  # the pixels that pass all six tests for sure (none known)
                 if hi - lo > 6:  # narrow long rows analytically; tiny quads test every pixel
                     slo, shi = lo, hi
-                    lo, hi, slo, shi = _span(g0, g1, g2, fv, True, lo, hi, slo, shi)
-                    lo, hi, slo, shi = _span(hz0, hz1, hz2, fv, True, lo, hi, slo, shi)
-                    lo, hi, slo, shi = _span(l0, l1, l2, fv, False, lo, hi, slo, shi)
-                    lo, hi, slo, shi = _span(-rr0, -rr1, -rr2, fv, True, lo, hi, slo, shi)
-                    lo, hi, slo, shi = _span(t0, t1, t2, fv, False, lo, hi, slo, shi)
-                    lo, hi, slo, shi = _span(-b0, -b1, -b2, fv, True, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(g0, g1, g2, fv, strict, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(hz0, hz1, hz2, fv, strict, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(l0, l1, l2, fv, loose, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(-rr0, -rr1, -rr2, fv, strict, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(t0, t1, t2, fv, loose, lo, hi, slo, shi)
+                    lo, hi, slo, shi = _span(-b0, -b1, -b2, fv, strict, lo, hi, slo, shi)
                     lo = max(lo, ulo)
                     hi = min(hi, uhi)
                 gv = g1 * fv + g2

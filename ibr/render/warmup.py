@@ -6,11 +6,11 @@ compositor 1.6 s, hole fill 1.8 s) while the second core idled.
 :func:`ibr.base.first_run.start_helper` starts ``python -m ibr.render.warmup``, which calls the
 rasterizer and then the hole fill on a tiny scene with the argument types of a real run (uint8
 colour, float32 depth, the mesh's read-only arrays), so they land in numba's on-disk cache while
-the main process compiles the segmentation (splitting, plane fit, labelling) and the compositor;
+the main process compiles the segmentation (splitting, plane fit) and the compositor;
 when the main process reaches them it loads them from the cache instead. ``python -m
 ibr.render.warmup stitch`` does the same for ``ibr stitch`` (the ray rasterizer's setup and the
 N-source blend into a spherical camera; the main process compiles the ray raster kernel itself),
-``... mesh`` for ``ibr mesh`` (the split's plane tests, the plane fit and the labelling). Nothing
+``... mesh`` for ``ibr mesh`` (the split's plane tests and the plane fit). Nothing
 here is needed for correctness: if the helper is slow or fails, the main process compiles what it
 needs itself.
 
@@ -108,7 +108,7 @@ def warm_stitch_kernels(marks: Path | None = None) -> None:
 
 def warm_mesh_kernels(marks: Path | None = None) -> None:
     """For ``ibr mesh``: the kernels the segmentation's split calls (quick reject, plane test,
-    crease split) and the plane fit and labelling, called directly on a small z' image with the
+    crease split) and the plane fit, called directly on a small z' image with the
     argument types of a real run (int32 rect bounds, as popped from the split's stack; float64
     z'), groups "segment" and "plane-fit". The main process compiles the edge prefix and the split
     meanwhile."""
@@ -121,9 +121,7 @@ def warm_mesh_kernels(marks: Path | None = None) -> None:
     k.rect_fit_within(zp, u0, v0, u1, v1, 0.1)
     k._crease_split_cached(zp, u0, v0, u1, v1, 5.0, *k._profile_cache(h, w))
     _mark(marks, "segment")  # the split can start; the plane fit is needed only after it
-    rects = np.array([[0, 0, w, h]], np.int32)
-    k.fit_planes_inv_depth(zp, rects)
-    k.label_rects(rects, h, w)
+    k.fit_planes_inv_depth(zp, np.array([[0, 0, w, h]], np.int32))
     _mark(marks, "plane-fit")
 
 
