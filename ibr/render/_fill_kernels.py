@@ -228,27 +228,6 @@ def pp_pull0(color, depth, holes, izref, squarings, coarse):
             coarse[cv, cu, nc + 1] += wt
 
 
-@njit(cache=True, error_model="numpy")
-def pp_pull(fine, coarse):
-    """2x2 box sums of weighted values and weights (pull step; the last channel is the weight)."""
-    h, w, n = fine.shape
-    hc, wc = coarse.shape[0], coarse.shape[1]
-    for v in range(hc):
-        for u in range(wc):
-            for k in range(n):
-                coarse[v, u, k] = 0.0
-            for dv in range(2):
-                vv = 2 * v + dv
-                if vv >= h:
-                    continue
-                for du in range(2):
-                    uu = 2 * u + du
-                    if uu >= w:
-                        continue
-                    for k in range(n):
-                        coarse[v, u, k] += fine[vv, uu, k]
-
-
 # bilinear weights of the 2x upsampling (half-pixel centres), float32 like the pyramid
 _W9 = np.float32(0.5625)
 _W3 = np.float32(0.1875)
@@ -321,35 +300,6 @@ def binomial3(src, need, out):
 
 
 @njit(cache=True, error_model="numpy")
-def pp_need(fine, coarse):
-    """Cells of the coarser level whose 2x2 children include a flagged cell of ``fine`` (the
-    caller dilates the result by one cell for the bilinear taps)."""
-    h, w = fine.shape
-    hc, wc = coarse.shape
-    for cv in range(hc):
-        for cu in range(wc):
-            coarse[cv, cu] = 0
-    for v in range(h):
-        cv = v // 2
-        for u in range(w):
-            if fine[v, u]:
-                coarse[cv, u // 2] = 1
-
-
-@njit(cache=True, error_model="numpy")
-def covered_max_depth(depth, holes):
-    """Largest valid depth outside the holes (0 when there is none)."""
-    h, w = depth.shape
-    m = 0.0
-    for v in range(h):
-        for u in range(w):
-            z = depth[v, u]
-            if not holes[v, u] and z > m:
-                m = z
-    return m
-
-
-@njit(cache=True, error_model="numpy")
 def axis_background(color, depth, holes, out, ok):
     """Directional background fill of the hole pixels along rows (pass transposed views for
     columns): each run of hole pixels takes the colour of the farther of its two covered
@@ -379,18 +329,6 @@ def axis_background(color, depth, holes, out, ok):
                 if src >= 0:
                     for c in range(nc):
                         out[v, k, c] = color[v, src, c]
-
-
-@njit(cache=True, error_model="numpy")
-def pp_top(sums, out_val):
-    """Mean values of the coarsest level (last channel: weight sum)."""
-    h, w, n = sums.shape
-    for v in range(h):
-        for u in range(w):
-            wt = sums[v, u, n - 1]
-            for k in range(n - 1):
-                out_val[v, u, k] = sums[v, u, k] / wt if wt > 0.0 else 0.0
-            out_val[v, u, n - 1] = wt
 
 
 @njit(cache=True, error_model="numpy")

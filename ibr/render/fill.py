@@ -233,7 +233,7 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         f = _fill_pullpush_inplace(c, z, hb, axis=axis, power=power, eps=eps, smooth=smooth, mix=mix)
         color[box], depth[box], filled[box] = c, z, f
         return filled
-    zmax = _k.covered_max_depth(depth, holes)
+    zmax = float(np.max(depth, where=~holes & (depth > 0), initial=0.0))  # the farthest covered depth
     if not zmax > 0:
         return filled
     h, w, nc = color.shape
@@ -243,18 +243,16 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
     sums = [None] + [np.empty((hh, ww, nc + 2), np.float32) for hh, ww in sizes[1:]]
     _k.pp_pull0(color, depth, holes, izref, squarings, sums[1])
     for lv in range(2, len(sizes)):
-        _k.pp_pull(sums[lv - 1], sums[lv])
+        _pull(sums[lv - 1], sums[lv])
     # push: each level only where the finer level reads it (parents of needed cells + 1 cell)
-    k3 = np.ones((3, 3), np.uint8)
+    k2, k3 = np.ones((2, 2), np.uint8), np.ones((3, 3), np.uint8)
     need = [holes.view(np.uint8)]
-    for lv, (hh, ww) in enumerate(sizes[1:], 1):
-        nxt = np.empty((hh, ww), np.uint8)
-        _k.pp_need(need[-1], nxt)
-        # + the bilinear taps (and at level 1 the 3x3 smoothing's taps)
-        nxt = cv2.dilate(nxt, k3, iterations=2 if (lv == 1 and smooth) else 1)
-        need.append(nxt)
-    val = np.empty_like(sums[-1])
-    _k.pp_top(sums[-1], val)
+    for lv in range(1, len(sizes)):
+        # parents of flagged cells (the max over each 2x2 block), + the bilinear taps (and at
+        # level 1 the 3x3 smoothing's taps)
+        parents = np.ascontiguousarray(cv2.dilate(need[-1], k2, anchor=(0, 0))[::2, ::2])
+        need.append(cv2.dilate(parents, k3, iterations=2 if (lv == 1 and smooth) else 1))
+    val = _top_values(sums[-1])
     for lv in range(len(sizes) - 2, 0, -1):
         nxt = np.empty_like(sums[lv])
         _k.pp_push(sums[lv], val, np.float32(eps), need[lv], nxt)
@@ -282,6 +280,29 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         direct = cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc)
     _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, color.dtype.kind in "ui", filled)
     return filled
+
+
+def _pull(fine, coarse):
+    """Pull step: ``coarse`` = 2x2 box sums of ``fine`` (weighted values and weights, float32),
+    added in the order (0, 0), (0, 1), (1, 0), (1, 1); a missing row or column adds nothing.
+    numpy slices, not a kernel (a first run compiled one in 0.4 s, #13)."""
+    h, w = fine.shape[:2]
+    if h % 2 or w % 2:  # an odd side: pad with zeros (exact: x + 0 = x)
+        padded = np.zeros((h + h % 2, w + w % 2) + fine.shape[2:], fine.dtype)
+        padded[:h, :w] = fine
+        fine = padded
+    np.add(fine[0::2, 0::2], fine[0::2, 1::2], out=coarse)
+    coarse += fine[1::2, 0::2]
+    coarse += fine[1::2, 1::2]
+
+
+def _top_values(sums):
+    """Mean values of the coarsest level (last channel: the weight sum; values 0 where it is 0)."""
+    wt = sums[..., -1:]
+    val = np.zeros_like(sums)
+    np.divide(sums[..., :-1], wt, out=val[..., :-1], where=wt > 0)
+    val[..., -1:] = wt
+    return val
 
 
 def _axis_fill(color, depth, holes, axis, out, ok):
