@@ -67,7 +67,7 @@ def _fresh_clone(tmp: Path) -> Path:
 
 
 def _cli_command(argv) -> list[str]:
-    return [sys.executable, "-c", f"import sys, cli; sys.exit(cli.main({argv!r}))"]
+    return [sys.executable, "-c", f"import cli; cli.run({argv!r})"]  # what the `ibr` command runs
 
 
 def _cold_and_warm(clone: Path, cache: Path, argv) -> tuple[float, float]:

@@ -171,7 +171,6 @@ def run(args) -> int:
     from commands._common import info, note_first_run, progress
     from ibr.io import load_view, write_image
     from ibr.io.outputs import OutputPlan, VIDEO_EXTS
-    from ibr.render.view_synthesis import iter_interpolate, source_mesh
     from commands._sequence import is_sequence_argument, run_interpolate  # sequences (#15)
 
     if len(args.views) == 1 and is_sequence_argument(args.views[0]):
@@ -209,6 +208,9 @@ def run(args) -> int:
         sheet = plan.add_file("--contact-sheet", args.contact_sheet, (".png", ".jpg", ".jpeg", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
         note_first_run("ibr.mesh._segment_kernels", "ibr.render._composite_kernels")
+        # imported after the first-run helper has started: numba's import (0.3 s) then overlaps it
+        from ibr.render.view_synthesis import iter_interpolate, source_mesh
+
         view_a, view_b = load_view(path_a), load_view(path_b)
 
         if args.method == "mesh":

@@ -56,7 +56,6 @@ def run(args) -> int:
     from ibr.base.view import View
     from ibr.io import load_view, write_depth, write_image
     from ibr.io.outputs import IMAGE_EXTS, OutputPlan
-    from ibr.render.view_synthesis import source_mesh, warp
 
     with OutputPlan("ibr warp", log=info) as plan:
         plan.add_view_input("VIEW", args.view)
@@ -67,6 +66,7 @@ def run(args) -> int:
         plan.check()  # every output checked before any work (#12)
         if args.method == "mesh":  # the interpolation's kernels: the helper compiles raster and fill
             note_first_run("ibr.mesh._segment_kernels", "ibr.render._composite_kernels")
+        from ibr.render.view_synthesis import source_mesh, warp  # after the helper's start (numba: 0.3 s)
 
         view = load_view(args.view)
         target = load_camera(args.to)

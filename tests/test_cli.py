@@ -1,6 +1,7 @@
 """Generic CLI behaviour (help, exit codes 0/1/2) and the ``samples`` command."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -49,6 +50,28 @@ def test_entry_point_exit_codes_in_a_subprocess(tmp_path):
     assert run("--help").returncode == 0
     bad = run("samples", "--out")
     assert bad.returncode == 2 and "expected one argument" in bad.stderr
+
+
+def test_console_command_skips_teardown_but_flushes_and_runs_exit_handlers(tmp_path):
+    """``cli.run`` (the ``ibr`` command) ends with os._exit after main (#13: the interpreter's
+    teardown cost 0.25-0.4 s): the exit code is main's, piped output is complete, atexit handlers
+    (the first-run helper's cleanup) have run; IBR_FULL_EXIT=1 exits the ordinary way."""
+    marker = tmp_path / "handler_ran"
+    code = ("import atexit, sys, cli; sys.path.insert(0, {root!r}); "
+            "atexit.register(lambda: open({marker!r}, 'w').write('yes')); cli.run({argv!r})")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}  # block-buffered pipes
+    env["PYTHONPATH"] = str(ROOT)
+    for full_exit in ("", "1"):
+        for argv, rc in ((["--help"], 0), (["mesh", str(tmp_path / "missing.json")], 1), (["nope"], 2)):
+            marker.unlink(missing_ok=True)
+            out = subprocess.run([sys.executable, "-c", code.format(root=str(ROOT), marker=str(marker), argv=argv)],
+                                 capture_output=True, text=True, cwd=tmp_path, env={**env, "IBR_FULL_EXIT": full_exit})
+            assert out.returncode == rc, (argv, out.stderr)
+            assert marker.read_text() == "yes"
+            if rc == 0:  # stdout is a pipe (block-buffered): all of the help arrived
+                assert out.stdout.rstrip().endswith(cli.build_parser().format_help().rstrip().splitlines()[-1])
+            elif rc == 1:
+                assert out.stderr.startswith("ibr mesh: error:") and "missing.json" in out.stderr
 
 
 @pytest.fixture(scope="module")
