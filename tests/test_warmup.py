@@ -32,25 +32,28 @@ def _kernels_compiled_by(run: str, env) -> list[str]:
 
 
 def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
-    """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the rasterizer and the
-    fill kernels; a real interpolation afterwards compiles none of those (it loads them)."""
+    """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the plane fit, the
+    rasterizer and the fill kernels; a real interpolation afterwards compiles none of those (it
+    loads them), only the segmentation's edge prefix and split."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
     marks = tmp_path / "marks"
     marks.mkdir()
     subprocess.run([sys.executable, "-m", "ibr.render.warmup", "frame", str(marks)], env=env, check=True, timeout=300)
-    assert sorted(p.name for p in marks.iterdir()) == ["fill", "raster"]  # each group marked once cached
+    assert sorted(p.name for p in marks.iterdir()) == ["fill", "plane-fit", "raster"]  # each group marked once cached
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
-    assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push"} <= cached
-    # the plane fit and labelling are the main process's (it reaches them first)
-    assert not any(name.startswith("_segment_kernels") for name in cached)
+    assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push",
+            "_segment_kernels._fit_planes_kernel"} <= cached
+    # the split is the main process's (it reaches it first); the plane fit's moments it shares
+    assert {n for n in cached if n.startswith("_segment_kernels")} == {"_segment_kernels._fit_planes_kernel",
+                                                                      "_segment_kernels._rect_moments"}
     compiled = _kernels_compiled_by(
         "from ibr.io import load_view\n"
         "from ibr.render.view_synthesis import interpolate\n"
         "from samples import DATA_DIR\n"
         "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
         "interpolate(a, b, 0.5, fill='inpaint')\n", env)
-    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels"))]
-    assert any(k.startswith("_segment_kernels") for k in compiled)  # the main process's share
+    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_segment_kernels._fit"))]
+    assert "_segment_kernels._split_edges_kernel" in compiled  # the main process's share
 
 
 def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):

@@ -26,7 +26,7 @@ __all__ = ["GROUPS", "MAX_WAIT_S", "await_kernels", "mark", "start_helper"]
 
 _STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
 #: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
-GROUPS = {"frame": ("raster", "fill"), "stitch": ("ray-setup", "blend"), "mesh": ("segment", "plane-fit")}
+GROUPS = {"frame": ("plane-fit", "raster", "fill"), "stitch": ("ray-setup", "blend"), "mesh": ("segment", "plane-fit")}
 _ALL_GROUPS = tuple(sorted({g for groups in GROUPS.values() for g in groups}))
 _READY: set = set()  # groups this process no longer waits for
 #: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
@@ -61,8 +61,8 @@ def await_kernels(group: str) -> None:
 
 
 def start_helper(kind: str = "frame") -> None:
-    """Start the helper process for ``kind`` (a key of :data:`GROUPS`: "frame" for the rasterizer
-    and the fill, "stitch" for the ray rasterizer's setup and the blend, "mesh" for the
+    """Start the helper process for ``kind`` (a key of :data:`GROUPS`: "frame" for the mesh's
+    plane fit, the rasterizer and the fill, "stitch" for the ray rasterizer's setup and the blend, "mesh" for the
     segmentation's plane tests and plane fit) once per process (quietly; killed at exit if still
     running)."""
     check_choice("kind", kind, tuple(GROUPS))

@@ -35,14 +35,18 @@ __all__ = ["warm_frame_kernels", "warm_mesh_kernels", "warm_stitch_kernels"]
 
 
 def warm_frame_kernels(marks: Path | None = None) -> None:
-    """Call the rasterizer and the hole fill once on a tiny scene (types as in a real run), in
-    the order the main process will need them after its own segmentation kernels; mark groups
-    "raster" and "fill" in the directory ``marks`` as they land in the cache."""
+    """Call the mesh's plane fit, the rasterizer and the hole fill once on a tiny scene (types as
+    in a real run), in the order the main process will need them after its own segmentation
+    kernels; mark groups "plane-fit", "raster" and "fill" in the directory ``marks`` as they land
+    in the cache."""
     from ..base.camera import Camera
+    from ..mesh import _segment_kernels as k
     from .fill import _fill_pullpush_inplace
     from .rasterize import rasterize_mesh
 
     h, w = 24, 32
+    k.fit_planes_inv_depth(np.ones((h, w)), np.array([[0, 0, w, h]], np.int32))
+    _mark(marks, "plane-fit")
     mesh = _tiny_mesh()
     moved = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h,
                    np.array([[1, 0, 0, 0.3], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]))
