@@ -254,3 +254,23 @@ def test_top_level_names_are_the_functions_whatever_was_imported_first():
             "assert isinstance(ibr.interpolate, types.FunctionType), ibr.interpolate; "
             "assert ibr.warp is ibr.render.view_synthesis.warp and ibr.Rendering is ibr.render.view_synthesis.Rendering")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_cli_ssim_equals_scikit_image(motorcycle):
+    """The CLI's SSIM (cv2.blur windows, no scipy import: #13) is scikit-image's
+    structural_similarity with its defaults, on the real Middlebury pair: colour, grey, and more
+    channels than cv2.blur takes at once; PSNR as peak_signal_noise_ratio."""
+    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+    from commands.interpolate import _metrics, _ssim, _to_float
+
+    left, right = (_to_float(v.color).astype(np.float64) for v in motorcycle)
+    assert left.ndim == 3 and left.shape[2] == 3
+    pairs = [(left, right), (left[..., 1], right[..., 1]), (np.dstack([left, right[..., :2]]), np.dstack([right, left[..., :2]]))]
+    for x, y in pairs:
+        ref = structural_similarity(x, y, data_range=1.0, channel_axis=-1 if x.ndim == 3 else None)
+        assert 0.2 < ref < 0.95 and abs(_ssim(x, y) - ref) < 1e-9
+    assert _ssim(left, left) == pytest.approx(1.0, abs=1e-12)
+    psnr, ssim = _metrics(left, right)
+    assert psnr == pytest.approx(peak_signal_noise_ratio(right, left, data_range=1.0), abs=1e-6)
+    assert ssim == pytest.approx(structural_similarity(right, left, data_range=1.0, channel_axis=-1), abs=1e-6)
