@@ -223,7 +223,6 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
     rows, cols = np.flatnonzero(holes.any(axis=1)), np.flatnonzero(holes.any(axis=0))
     if rows.size == 0:
         return filled
-    await_kernels("fill")  # a first run: the helper may be caching the fill kernels right now
     # work on the holes' bounding box plus CONTEXT_PX (few small holes: a small pyramid)
     v0, v1 = max(rows[0] - CONTEXT_PX, 0), min(rows[-1] + 1 + CONTEXT_PX, holes.shape[0])
     u0, u1 = max(cols[0] - CONTEXT_PX, 0), min(cols[-1] + 1 + CONTEXT_PX, holes.shape[1])
@@ -237,6 +236,26 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
     if not zmax > 0:
         return filled
     h, w, nc = color.shape
+    # the directional fill first: it reads only the inputs, and on a first run the main process
+    # compiles its kernel while the helper compiles the pyramid's (#13)
+    direct_ok = np.zeros((h, w), np.bool_)
+    direct = _ONE_PIXEL
+    if mix > 0:  # background side along the parallax axis (rows or columns) ...
+        direct = color.copy()  # the source dtype: uint8 filters fastest, values are copies
+        _axis_fill(color, depth, holes, axis, direct, direct_ok)
+        lack = holes & ~direct_ok
+        if lack.any():  # whole lines of holes along the axis (a strip at the border): the other axis
+            other, other_ok = color.copy(), np.zeros((h, w), np.bool_)
+            _axis_fill(color, depth, holes, 1 - axis, other, other_ok)
+            take = lack & other_ok
+            direct[take] = other[take]
+            direct_ok |= take
+        # ... smoothed across the axis (binomial, sigma 1.4 px), so that neighbouring rows copied
+        # from different pixels do not show as streaks; outside the holes it reads the image
+        one = np.ones(1, np.float32)
+        kx, ky = (_ACROSS, one) if axis == 1 else (one, _ACROSS)
+        direct = cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc)
+    await_kernels("fill")  # a first run: the helper may be caching the pull-push kernels right now
     squarings = max(int(round(np.log2(power))), 0)
     sizes = _pyramid_sizes(h, w)
     izref = np.float32(1.0 / zmax)
@@ -261,23 +280,6 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         sm = np.empty_like(val)
         _k.binomial3(val, need[1], sm)
         val = sm
-    direct_ok = np.zeros((h, w), np.bool_)
-    direct = _ONE_PIXEL
-    if mix > 0:  # background side along the parallax axis (rows or columns) ...
-        direct = color.copy()  # the source dtype: uint8 filters fastest, values are copies
-        _axis_fill(color, depth, holes, axis, direct, direct_ok)
-        lack = holes & ~direct_ok
-        if lack.any():  # whole lines of holes along the axis (a strip at the border): the other axis
-            other, other_ok = color.copy(), np.zeros((h, w), np.bool_)
-            _axis_fill(color, depth, holes, 1 - axis, other, other_ok)
-            take = lack & other_ok
-            direct[take] = other[take]
-            direct_ok |= take
-        # ... smoothed across the axis (binomial, sigma 1.4 px), so that neighbouring rows copied
-        # from different pixels do not show as streaks; outside the holes it reads the image
-        one = np.ones(1, np.float32)
-        kx, ky = (_ACROSS, one) if axis == 1 else (one, _ACROSS)
-        direct = cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc)
     _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, color.dtype.kind in "ui", filled)
     return filled
 

@@ -37,11 +37,12 @@ __all__ = ["warm_frame_kernels", "warm_mesh_kernels", "warm_stitch_kernels"]
 def warm_frame_kernels(marks: Path | None = None) -> None:
     """Call the mesh's plane fit, the rasterizer and the hole fill once on a tiny scene (types as
     in a real run), in the order the main process will need them after its own segmentation
-    kernels; mark groups "plane-fit", "raster" and "fill" in the directory ``marks`` as they land
-    in the cache."""
+    kernels; mark groups "plane-fit", "raster" and "fill" (the pull-push; the directional fill's
+    kernel is left to the main process, which compiles it while this compiles the pyramid's) in
+    the directory ``marks`` as they land in the cache."""
     from ..base.camera import Camera
     from ..mesh import _segment_kernels as k
-    from .fill import _fill_pullpush_inplace
+    from . import fill
     from .rasterize import rasterize_mesh
 
     h, w = 24, 32
@@ -57,7 +58,8 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     holes = np.zeros((h, w), np.bool_)
     holes[8:12, 10:20] = True
     depth[holes] = np.nan
-    _fill_pullpush_inplace(color, depth, holes, axis=0)
+    with _replaced(fill, "_axis_fill", _skip):
+        fill._fill_pullpush_inplace(color, depth, holes, axis=0)
     _mark(marks, "fill")
 
 
