@@ -230,6 +230,11 @@ def _check_write_dtype(path: Path, arr: np.ndarray, name: str) -> str:
     return ext
 
 
+#: zlib level of written PNGs: a 512x384 frame took 53 ms at OIIO's default 6 (three of them were
+#: a tenth of a warm `ibr interpolate`, #13), 23 ms at 4, for 261 kB instead of 250 kB.
+PNG_COMPRESSION_LEVEL = 4
+
+
 def write_image(path, array) -> None:
     """Write an image atomically; the format follows the extension and the dtype is preserved.
 
@@ -258,6 +263,8 @@ def write_image(path, array) -> None:
         spec.attribute("oiio:UnassociatedAlpha", 1)  # RGBA arrays are straight (not premultiplied)
         if ext in (".jpg", ".jpeg"):
             spec.attribute("Compression", "jpeg:95")
+        if ext == ".png":  # zlib level 4: 2.3x faster to write than OIIO's default 6, files ~5 % larger
+            spec.attribute("png:compressionLevel", PNG_COMPRESSION_LEVEL)
         try:
             if not out.open(str(tmp), spec):
                 raise OSError(f"{path}: cannot open for writing: {out.geterror()}")
