@@ -212,7 +212,10 @@ def baseline_segment(rev: str):
     name = "ibr_" + "".join(c if c.isalnum() else "_" for c in rev)
     (tmp / "ibr").rename(tmp / name)
     sys.path.insert(0, str(tmp))
-    return importlib.import_module(f"{name}.segment").segment
+    try:  # ibr.mesh.segment since the stage layout (#9); ibr.segment before
+        return importlib.import_module(f"{name}.mesh.segment").segment
+    except ModuleNotFoundError:
+        return importlib.import_module(f"{name}.segment").segment
 
 
 def timing_table(repeats: int, baseline: str | None):
