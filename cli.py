@@ -76,19 +76,22 @@ def run(argv: list[str] | None = None) -> None:
     interpreter down. Freeing numba's compiled code and the modules at exit took 0.25-0.4 s of
     every command (#13); by then every output is renamed into place and closed, so the exit
     handlers (the first-run helper's cleanup among them) run, the standard streams are flushed
-    and the process ends. ``IBR_FULL_EXIT=1`` keeps the ordinary exit (e.g. to see leak reports).
+    and the process ends (threads still running are not joined: none is by then). A program
+    that calls the CLI in-process should call :func:`main`, which returns the exit code.
+    ``IBR_FULL_EXIT=1`` keeps the ordinary exit (e.g. to see leak reports).
     """
     import atexit
     import os
 
     code = main(argv)
     run_exit_handlers = getattr(atexit, "_run_exitfuncs", None)
-    if run_exit_handlers is None or os.environ.get("IBR_FULL_EXIT"):
+    if run_exit_handlers is None or os.environ.get("IBR_FULL_EXIT", "0") not in ("", "0"):
         sys.exit(code)
     run_exit_handlers()
-    for stream in (sys.stdout, sys.stderr):
+    for stream in (sys.stdout, sys.stderr, sys.__stdout__, sys.__stderr__):
         try:
-            stream.flush()
+            if stream is not None:  # None: the descriptor was closed at start (``ibr ... >&-``)
+                stream.flush()
         except (OSError, ValueError):  # a closed pipe: nothing more to say
             pass
     os._exit(code)

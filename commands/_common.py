@@ -125,9 +125,9 @@ class terminate_as_interrupt:
 def note_first_run(*modules: str, warm: str = "frame") -> bool:
     """Say before a long first run that numba is compiling (once): when none of ``modules``
     (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet; then
-    also start compiling the kernels ``warm`` names ("frame": the rasterizer and the hole fill;
-    "stitch": the ray rasterizer's setup and the blend; "mesh": the segmentation's plane tests,
-    plane fit) in a second process (:mod:`ibr.render.warmup`).
+    also start compiling the kernels ``warm`` names ("frame": the plane fit, the rasterizer and the
+    hole fill's pull-push; "stitch": the ray rasterizer's setup and the blend; "mesh": the
+    segmentation's plane tests and plane fit) in a second process (:mod:`ibr.render.warmup`).
     Returns whether this is such a first run."""
     import importlib.util
     import os

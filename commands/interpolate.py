@@ -88,15 +88,19 @@ def _to_float(color):
 def _metrics(color, truth):
     """PSNR (dB) and SSIM of a frame against a ground-truth color image, on [0, 1] values.
 
-    Both are scikit-image's definitions, evaluated without importing its metrics: PSNR =
-    10 log10(1 / MSE) as ``peak_signal_noise_ratio`` (whose module imports scipy.stats: 0.6 s of
-    a 1.6 s warm run, #13), SSIM as :func:`_ssim`."""
+    Both are scikit-image's definitions, evaluated without importing its metrics: PSNR as
+    :func:`_psnr`, SSIM as :func:`_ssim` (NaN for images under 7 px a side)."""
+    a, b = _to_float(color), _to_float(truth)
+    return _psnr(a, b), _ssim(b, a)
+
+
+def _psnr(color, truth) -> float:
+    """10 log10(1 / MSE) of [0, 1] values, as scikit-image's ``peak_signal_noise_ratio`` (whose
+    module imports scipy.stats: 0.6 s of a 1.6 s warm run, #13); inf for identical images."""
     import numpy as np
 
-    a, b = _to_float(color), _to_float(truth)
-    mse = float(np.mean((b.astype(np.float64) - a.astype(np.float64)) ** 2))
-    psnr = float(10 * np.log10(1.0 / mse)) if mse > 0 else float("inf")
-    return psnr, _ssim(b, a)
+    mse = float(np.mean((np.asarray(truth, np.float64) - np.asarray(color, np.float64)) ** 2))
+    return float(10 * np.log10(1.0 / mse)) if mse > 0 else float("inf")
 
 
 def _ssim(x, y, data_range: float = 1.0) -> float:
@@ -109,6 +113,8 @@ def _ssim(x, y, data_range: float = 1.0) -> float:
     import numpy as np
 
     x, y = (np.asarray(a, np.float64) for a in (x, y))
+    if min(x.shape[:2]) < 7:  # no whole window (scikit-image refuses such images)
+        return float("nan")
     if x.ndim == 3 and x.shape[2] > 4:  # cv2.blur takes up to four channels at a time
         return float(np.mean([_ssim(x[..., c], y[..., c], data_range) for c in range(x.shape[2])]))
     win, n = 7, 49

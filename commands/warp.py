@@ -52,7 +52,7 @@ def run(args) -> int:
     import numpy as np
 
     from commands._common import info, note_first_run
-    from commands.interpolate import _metrics, _to_float, _to_png
+    from commands.interpolate import _psnr, _to_float, _to_png
     from ibr.base.view import View
     from ibr.io import load_view, write_depth, write_image
     from ibr.io.outputs import IMAGE_EXTS, OutputPlan
@@ -84,7 +84,7 @@ def run(args) -> int:
             psnr = 10 * np.log10(1.0 / max(float(np.mean((a - b) ** 2)), 1e-20))
             line += f", PSNR over covered pixels {psnr:.2f} dB vs {Path(args.to).name}"
             if args.fill != "none":
-                line += f" (whole image: {_metrics(result.color, target.color)[0]:.2f} dB)"
+                line += f" (whole image: {_psnr(_to_float(result.color), _to_float(target.color)):.2f} dB)"
         color = _to_float(result.color) if out.suffix.lower() in (".exr", ".pfm") else result.color
         if out.suffix.lower() in (".png", ".jpg", ".jpeg"):
             color = _to_png(color)

@@ -72,6 +72,11 @@ def test_console_command_skips_teardown_but_flushes_and_runs_exit_handlers(tmp_p
                 assert out.stdout.rstrip().endswith(cli.build_parser().format_help().rstrip().splitlines()[-1])
             elif rc == 1:
                 assert out.stderr.startswith("ibr mesh: error:") and "missing.json" in out.stderr
+    # started with stdout closed (sys.stdout is None): still main's code, no traceback
+    closed = subprocess.run([sys.executable, "-c", code.format(root=str(ROOT), marker=str(marker), argv=["--help"])],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env,
+                            pass_fds=(), preexec_fn=lambda: os.close(1))
+    assert closed.returncode == 0 and "Traceback" not in closed.stderr, closed.stderr
 
 
 @pytest.fixture(scope="module")

@@ -271,6 +271,7 @@ def test_cli_ssim_equals_scikit_image(motorcycle):
         ref = structural_similarity(x, y, data_range=1.0, channel_axis=-1 if x.ndim == 3 else None)
         assert 0.2 < ref < 0.95 and abs(_ssim(x, y) - ref) < 1e-9
     assert _ssim(left, left) == pytest.approx(1.0, abs=1e-12)
+    assert np.isnan(_ssim(left[:6], right[:6])) and np.isfinite(_ssim(left[:7], right[:7]))  # a 7x7 window fits
     psnr, ssim = _metrics(left, right)
     assert psnr == pytest.approx(peak_signal_noise_ratio(right, left, data_range=1.0), abs=1e-6)
     assert ssim == pytest.approx(structural_similarity(right, left, data_range=1.0, channel_axis=-1), abs=1e-6)

@@ -142,6 +142,9 @@ def test_rect_labels_and_coverage_match_a_plain_loop():
     for u0, v0, u1, v1 in rects:
         cover[max(v0, 0):max(v1, 0), max(u0, 0):max(u1, 0)] = True
     assert np.array_equal(K.rect_coverage(rects, h, w), cover) and 0 < cover.sum() < h * w
+    for bad in ([[0, 0, w + 1, 2]], [[-1, 0, 2, 2]], [[3, 3, 3, 5]], [[4, 1, 2, 2]]):
+        with pytest.raises(ValueError, match=r"rects: expected non-empty \[u0, v0, u1, v1\] inside the 31x23 image"):
+            K.label_rects(np.array(bad), h, w)
 
 
 def test_quadmesh_validation():

@@ -482,7 +482,13 @@ def label_rects(rects, h, w):
     numpy, not a kernel (a first run compiled one in 0.3 s, #13): each rect adds its index + 1
     at its four corners of a difference array (+ at (v0, u0) and (v1, u1), - at the other two),
     whose 2-D prefix sum is that index over the rect (13 ms for 19,200 rects at 1920x1080).
+    Overlapping rects give meaningless labels (:func:`rect_coverage` takes any rects); rects
+    that are empty or leave the image are refused.
     """
+    r = np.asarray(rects).reshape(-1, 4)
+    if len(r) and not ((r[:, 0] >= 0) & (r[:, 1] >= 0) & (r[:, 2] <= w) & (r[:, 3] <= h)
+                       & (r[:, 0] < r[:, 2]) & (r[:, 1] < r[:, 3])).all():
+        raise ValueError(f"rects: expected non-empty [u0, v0, u1, v1] inside the {w}x{h} image")
     return _rect_corner_sums(rects, h, w, np.arange(1, len(rects) + 1, dtype=np.int32)) - 1
 
 

@@ -4,9 +4,10 @@ numba compiles each kernel the first time it is called, one after the other, on 
 install's first ``ibr interpolate`` spent ~9 s compiling (segmentation 3.6 s, rasterizer 2.2 s,
 compositor 1.6 s, hole fill 1.8 s) while the second core idled.
 :func:`ibr.base.first_run.start_helper` starts ``python -m ibr.render.warmup``, which calls the
-rasterizer and then the hole fill on a tiny scene with the argument types of a real run (uint8
-colour, float32 depth, the mesh's read-only arrays), so they land in numba's on-disk cache while
-the main process compiles the segmentation (splitting, plane fit) and the compositor;
+mesh's plane fit, the rasterizer and then the hole fill's pull-push on a tiny scene with the
+argument types of a real run (uint8 colour, float32 depth, the mesh's read-only arrays), so they
+land in numba's on-disk cache while the main process compiles the segmentation's edge prefix and
+split, the compositor and the fill's directional pass;
 when the main process reaches them it loads them from the cache instead. ``python -m
 ibr.render.warmup stitch`` does the same for ``ibr stitch`` (the ray rasterizer's setup and the
 N-source blend into a spherical camera; the main process compiles the ray raster kernel itself),
@@ -65,9 +66,8 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
 
 def _tiny_mesh():
     """A 32 x 24 source of two quads (a step from z = 2 to z = 4) with the argument types of a
-    real mesh, built by hand: the plane fit and labelling are left to the main process, which
-    reaches them right after its segmentation (compiling them here too made this helper the
-    last to finish, #13)."""
+    real mesh, built by hand (its plane fit is warmed separately, first of all: the main process
+    needs it right after its segmentation, #13)."""
     from ..base.camera import Camera
     from ..mesh.quad_mesh import QuadMesh
 
