@@ -69,7 +69,7 @@ def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):
     subprocess.run([sys.executable, "-m", "ibr.render.warmup", "stitch", str(marks)], env=env, check=True, timeout=300)
     assert sorted(p.name for p in marks.iterdir()) == ["blend", "ray-setup"]
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
-    assert {"_ray_kernels._setup_rays", "_ray_kernels.region", "_blend_kernels.accumulate_spherical",
+    assert {"_ray_kernels._setup_rays", "_ray_kernels._region", "_blend_kernels.accumulate_spherical",
             "_blend_kernels.resolve"} <= cached
     assert "_ray_kernels._raster_rays" not in cached
     compiled = _kernels_compiled_by(
