@@ -378,3 +378,42 @@ def test_ghost_outline_beside_a_disocclusion_is_gone_after_the_fill():
     assert psnr(new.color, truth.color) > psnr(old.color, truth.color) + 0.5
     np.testing.assert_array_equal(new.holes, old.holes)
     assert 0 < (new.filled & ~new.holes).sum() < 0.01 * new.holes.size
+
+
+def test_sliver_between_two_foreground_edges_takes_the_background_not_the_farther_edge():
+    """Hard case (the clutter box at t = 0.75): a 3-px hole between a near post (z = 1.5) and a
+    box (z = 3.4) in every row, the wall (z = 5, white) visible above and below. On the row both
+    neighbours are foreground, the box the farther: copying it drew a dark line. The fill now
+    keeps the directional colour only where its source is as far as the pull-push's depth, so
+    the sliver takes the wall's colour; a wide disocclusion (run > DIRECT_CHECK_RUN) still takes
+    the directional colour."""
+    from ibr.render import fill as F
+
+    h, w = 40, 40
+    col = np.full((h, w, 3), 230, np.uint8)  # the wall
+    z = np.full((h, w), 5.0, np.float32)
+    rows = slice(8, 32)
+    col[rows, :18], z[rows, :18] = 10, 1.5  # the post
+    col[rows, 21:], z[rows, 21:] = (20, 30, 60), 3.4  # the box
+    holes = np.zeros((h, w), bool)
+    holes[rows, 18:21] = True
+    z[holes] = np.nan
+    c, d, f = fill_pullpush(col, z, holes, axis=0)
+    assert f[holes].all() and np.median(d[holes]) > 4.0  # mostly the wall's depth
+    assert c[holes].astype(float).mean() > 130  # mostly the wall's colour (230), not the box's (~35)
+    old = F.DIRECT_CHECK_RUN
+    try:
+        F.DIRECT_CHECK_RUN = 0  # every run unchecked (before #11's fix): the box's colour leaks in
+        c0, _, _ = fill_pullpush(col, z, holes, axis=0)
+    finally:
+        F.DIRECT_CHECK_RUN = old
+    assert c0[holes].astype(float).mean() < c[holes].astype(float).mean() - 40
+    # a wide run (12 px) between the post and the box: the directional colour stays (the box)
+    wide = np.zeros((h, w), bool)
+    wide[rows, 18:30] = True
+    zw = np.where(wide, np.nan, np.where(np.arange(w) >= 30, 3.4, z)).astype(np.float32)
+    cw = col.copy()
+    cw[rows, 30:] = (20, 30, 60)
+    a, _, _ = fill_pullpush(cw, zw, wide, axis=0)
+    b, _, _ = fill_pullpush(cw, zw, wide, axis=0, mix=0.0)
+    assert np.abs(a[wide].astype(float) - b[wide]).mean() > 10  # the directional half was mixed in

@@ -300,11 +300,13 @@ def binomial3(src, need, out):
 
 
 @njit(cache=True, error_model="numpy")
-def axis_background(color, depth, holes, out, ok):
+def axis_background(color, depth, holes, out, ok, out_z, max_run):
     """Directional background fill of the hole pixels along rows (pass transposed views for
     columns): each run of hole pixels takes the colour of the farther of its two covered
-    neighbours on the row (the only one at the border). Writes ``out`` (float32) and ``ok`` at
-    hole pixels only; a row without any covered pixel stays ``ok = False``."""
+    neighbours on the row (the only one at the border). Writes ``out`` and ``ok`` at hole pixels
+    only, and ``out_z``: the depth of the colour's source for runs of at most ``max_run`` pixels,
+    +inf for longer runs (their source is never second-guessed); a row without any covered
+    pixel stays ``ok = False``."""
     h, w, nc = color.shape
     for v in range(h):
         j = 0
@@ -327,15 +329,17 @@ def axis_background(color, depth, holes, out, ok):
             for k in range(a, j):
                 ok[v, k] = src >= 0
                 if src >= 0:
+                    out_z[v, k] = depth[v, src] if j - a <= max_run else np.inf
                     for c in range(nc):
                         out[v, k, c] = color[v, src, c]
 
 
 @njit(cache=True, error_model="numpy")
-def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, is_int, filled):
+def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, direct_z, gate, is_int, filled):
     """Last push step, fused with the write: every hole pixel takes the bilinear upsampling of
     level 1's values (it has no weight of its own), colour mixed as ``(1 - mix) * pushed + mix
-    * direct`` where the directional background fill exists; depth from the pull-push."""
+    * direct`` where the directional background fill exists and its source lies at least at
+    ``gate`` times the pushed depth (``direct_z``); depth from the pull-push."""
     h, w, nc = color.shape
     hc, wc = coarse_val.shape[0], coarse_val.shape[1]
     for v in range(h):
@@ -347,7 +351,7 @@ def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, is_int, f
             z = _up(coarse_val, cv, cu, ov, ou, nc)
             if not (z > 0.0):
                 continue
-            d = direct_ok[v, u]
+            d = direct_ok[v, u] and direct_z[v, u] >= gate * z
             for k in range(nc):
                 x = _up(coarse_val, cv, cu, ov, ou, k)
                 if d:
