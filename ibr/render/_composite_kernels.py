@@ -270,16 +270,20 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
                     drow[u] = b
                 crow[u] = True
             elif has_a or has_b:  # one layer: its sample, and whether it is a rim beside a hole
+                # (no arrays rebound per pixel: numba counts references on each rebinding, which
+                # made a one-source warp, where every pixel takes this branch, 2x slower)
                 if has_a:
                     _copy3(orow, lar, u)
                     drow[u] = a
-                    flags, mu, mv = ra, ua, va
                 else:
                     _copy3(orow, lbr, u)
                     drow[u] = b
-                    flags, mu, mv = rb, ub, vb
                 crow[u] = True
-                rrow[u] = use_trust and _nearest(flags, mu[v, u], mv[v, u]) and _beside_hole(za, zb, v, u)
+                if use_trust:
+                    if has_a:
+                        rrow[u] = _nearest(ra, ua[v, u], va[v, u]) and _beside_hole(za, zb, v, u)
+                    else:
+                        rrow[u] = _nearest(rb, ub[v, u], vb[v, u]) and _beside_hole(za, zb, v, u)
             else:
                 orow[u, 0] = 0
                 orow[u, 1] = 0
