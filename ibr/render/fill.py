@@ -251,25 +251,7 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
     h, w, nc = color.shape
     # the directional fill first: it reads only the inputs, and on a first run the main process
     # compiles its kernel while the helper compiles the pyramid's (#13)
-    direct_ok = np.zeros((h, w), np.bool_)
-    direct_z = np.full((h, w), np.inf, np.float32)  # the depth of each directional colour's source
-    direct = _ONE_PIXEL
-    if mix > 0:  # background side along the parallax axis (rows or columns) ...
-        direct = color.copy()  # the source dtype: uint8 filters fastest, values are copies
-        _axis_fill(color, depth, holes, axis, direct, direct_ok, direct_z)
-        lack = holes & ~direct_ok
-        if lack.any():  # whole lines of holes along the axis (a strip at the border): the other axis
-            other, other_ok, other_z = color.copy(), np.zeros((h, w), np.bool_), np.full((h, w), np.inf, np.float32)
-            _axis_fill(color, depth, holes, 1 - axis, other, other_ok, other_z)
-            take = lack & other_ok
-            direct[take] = other[take]
-            direct_z[take] = other_z[take]
-            direct_ok |= take
-        # ... smoothed across the axis (binomial, sigma 1.4 px), so that neighbouring rows copied
-        # from different pixels do not show as streaks; outside the holes it reads the image
-        one = np.ones(1, np.float32)
-        kx, ky = (_ACROSS, one) if axis == 1 else (one, _ACROSS)
-        direct = cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc)
+    direct, direct_ok, direct_z = _directional_fill(color, depth, holes, axis, mix)
     await_kernels("fill")  # a first run: the helper may be caching the pull-push kernels right now
     squarings = max(int(round(np.log2(power))), 0)
     sizes = _pyramid_sizes(h, w)
@@ -298,6 +280,35 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
     _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, direct_z, np.float32(DIRECT_MIN_DEPTH),
                  color.dtype.kind in "ui", filled)
     return filled
+
+
+def _directional_fill(color, depth, holes, axis, mix):
+    """The directional half of :func:`fill_pullpush`: (colour (H, W, C) smoothed across the axis,
+    ok (H, W) bool, the depth of each colour's source (H, W) float32, +inf where unchecked).
+    ``mix`` 0: nothing (ok all False)."""
+    import cv2
+
+    h, w, nc = color.shape
+    direct_ok = np.zeros((h, w), np.bool_)
+    direct_z = np.full((h, w), np.inf, np.float32)
+    if not mix > 0:
+        return _ONE_PIXEL, direct_ok, direct_z
+    # the background side along the parallax axis (rows or columns) ...
+    direct = color.copy()  # the source dtype: uint8 filters fastest, values are copies
+    _axis_fill(color, depth, holes, axis, direct, direct_ok, direct_z)
+    lack = holes & ~direct_ok
+    if lack.any():  # whole lines of holes along the axis (a strip at the border): the other axis
+        other, other_ok, other_z = color.copy(), np.zeros((h, w), np.bool_), np.full((h, w), np.inf, np.float32)
+        _axis_fill(color, depth, holes, 1 - axis, other, other_ok, other_z)
+        take = lack & other_ok
+        direct[take] = other[take]
+        direct_z[take] = other_z[take]
+        direct_ok |= take
+    # ... smoothed across the axis (binomial, sigma 1.4 px), so that neighbouring rows copied from
+    # different pixels do not show as streaks; outside the holes it reads the image
+    one = np.ones(1, np.float32)
+    kx, ky = (_ACROSS, one) if axis == 1 else (one, _ACROSS)
+    return cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc), direct_ok, direct_z
 
 
 def _pull(fine, coarse):
