@@ -485,11 +485,18 @@ def label_rects(rects, h, w):
     Overlapping rects give meaningless labels (:func:`rect_coverage` takes any rects); rects
     that are empty or leave the image are refused.
     """
-    r = np.asarray(rects).reshape(-1, 4)
-    if len(r) and not ((r[:, 0] >= 0) & (r[:, 1] >= 0) & (r[:, 2] <= w) & (r[:, 3] <= h)
-                       & (r[:, 0] < r[:, 2]) & (r[:, 1] < r[:, 3])).all():
-        raise ValueError(f"rects: expected non-empty [u0, v0, u1, v1] inside the {w}x{h} image")
+    check_rects_inside(rects, h, w)
     return _rect_corner_sums(rects, h, w, np.arange(1, len(rects) + 1, dtype=np.int32)) - 1
+
+
+def check_rects_inside(rects, h, w) -> None:
+    """Refuse (ValueError naming ``rects`` and the first bad one) rects that are empty or leave
+    the h x w image; a numba kernel would read or write outside the arrays."""
+    r = np.asarray(rects).reshape(-1, 4)
+    inside = (r[:, 0] >= 0) & (r[:, 1] >= 0) & (r[:, 2] <= w) & (r[:, 3] <= h) & (r[:, 0] < r[:, 2]) & (r[:, 1] < r[:, 3])
+    if not inside.all():
+        raise ValueError(f"rects: expected non-empty [u0, v0, u1, v1] inside the {w}x{h} image, "
+                         f"got {r[np.argmin(inside)].tolist()}")
 
 
 def rect_coverage(rects, h, w):

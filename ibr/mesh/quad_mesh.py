@@ -170,15 +170,11 @@ def fit_inv_depth_planes(depth, rects) -> np.ndarray:
     cheap; least squares averages 16/24-bit quantization noise instead of trusting the corners. A
     one-pixel rect gets a = b = 0, c = 1/z of its center. Every pixel of every rect must be valid.
     """
-    from ._segment_kernels import fit_planes_inv_depth
+    from ._segment_kernels import check_rects_inside, fit_planes_inv_depth
 
     q = _inv_depth(depth)
     r = np.ascontiguousarray(rects, dtype=np.int32).reshape(-1, 4)
-    h, w = q.shape
-    inside = (r[:, 0] >= 0) & (r[:, 1] >= 0) & (r[:, 2] <= w) & (r[:, 3] <= h) & (r[:, 0] < r[:, 2]) & (r[:, 1] < r[:, 3])
-    if not inside.all():
-        bad = r[np.argmin(inside)].tolist()
-        raise ValueError(f"rects: expected non-empty [u0, v0, u1, v1] inside the {w}x{h} image, got {bad}")
+    check_rects_inside(r, *q.shape)
     if len(r) and not np.isfinite(q[_rect_pixels_mask(r, q.shape)]).all():
         raise ValueError("rects: cover pixels with invalid depth")
     return fit_planes_inv_depth(q, r)
@@ -275,7 +271,7 @@ def _mesh_from_segmentation(camera, depth, seg, t0) -> QuadMesh:
     from ..base.first_run import await_kernels
     from ._segment_kernels import fit_planes_inv_depth, label_rects
 
-    await_kernels("plane-fit")  # a first `ibr mesh`: the helper may be caching these two right now
+    await_kernels("plane-fit")  # a first run: the helper may be caching the plane fit right now
     planes = fit_planes_inv_depth(seg.inv_depth, seg.rects)
     h, w = camera.shape
     qop = label_rects(seg.rects, h, w)
