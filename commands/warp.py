@@ -52,10 +52,11 @@ def run(args) -> int:
     import numpy as np
 
     from commands._common import info, note_first_run
-    from commands.interpolate import _psnr, _to_float, _to_png
+    from commands.interpolate import _to_float, _to_png
     from ibr.base.view import View
     from ibr.io import load_view, write_depth, write_image
     from ibr.io.outputs import IMAGE_EXTS, OutputPlan
+    from ibr.sequence.metrics import psnr
 
     with OutputPlan("ibr warp", log=info) as plan:
         plan.add_view_input("VIEW", args.view)
@@ -81,10 +82,10 @@ def run(args) -> int:
         if isinstance(target, View) and target.color.shape == result.color.shape:
             cov = ~result.holes
             a, b = _to_float(result.color)[cov], _to_float(target.color)[cov]
-            psnr = 10 * np.log10(1.0 / max(float(np.mean((a - b) ** 2)), 1e-20))
-            line += f", PSNR over covered pixels {psnr:.2f} dB vs {Path(args.to).name}"
+            covered_db = 10 * np.log10(1.0 / max(float(np.mean((a - b) ** 2)), 1e-20))
+            line += f", PSNR over covered pixels {covered_db:.2f} dB vs {Path(args.to).name}"
             if args.fill != "none":
-                line += f" (whole image: {_psnr(_to_float(result.color), _to_float(target.color)):.2f} dB)"
+                line += f" (whole image: {psnr(result.color, target.color):.2f} dB)"
         color = _to_float(result.color) if out.suffix.lower() in (".exr", ".pfm") else result.color
         if out.suffix.lower() in (".png", ".jpg", ".jpeg"):
             color = _to_png(color)

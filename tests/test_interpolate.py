@@ -217,6 +217,11 @@ def test_cli_warp(tmp_path, motorcycle, capsys):
     img = read_image(tmp_path / "w.png")
     holes = read_image(tmp_path / "h.png") > 0
     assert psnr(img, right.color, ~holes) > 27.0
+    # with the fill, the whole image's PSNR too (ibr.sequence.metrics.psnr of the written frame)
+    assert cli.main(["warp", str(tmp_path / "left.json"), "--to", str(tmp_path / "right.json"),
+                     "-o", str(tmp_path / "wf.png")]) == 0
+    whole = float(capsys.readouterr().err.split("(whole image: ")[1].split(" dB")[0])
+    assert whole == pytest.approx(psnr(read_image(tmp_path / "wf.png"), right.color), abs=0.006) and 20 < whole < 27
     # a bare camera dict as target
     (tmp_path / "cam.json").write_text(json.dumps(right.camera.to_dict()))
     assert cli.main(["warp", str(tmp_path / "left.json"), "--to", str(tmp_path / "cam.json"),
