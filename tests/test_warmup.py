@@ -34,7 +34,7 @@ def _kernels_compiled_by(run: str, env) -> list[str]:
 def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the plane fit, the
     rasterizer and the fill kernels; a real interpolation afterwards compiles none of those (it
-    loads them), only the segmentation's edge prefix and split."""
+    loads them), only the segmentation's edge prefix and split and the compositor."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
     marks = tmp_path / "marks"
     marks.mkdir()
@@ -42,7 +42,7 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     assert sorted(p.name for p in marks.iterdir()) == ["fill", "plane-fit", "raster"]  # each group marked once cached
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push",
-            "_segment_kernels._fit_planes_kernel"} <= cached and "_fill_kernels.axis_background" not in cached
+            "_fill_kernels.axis_background", "_segment_kernels._fit_planes_kernel"} <= cached
     # the split is the main process's (it reaches it first); the plane fit's moments it shares
     assert {n for n in cached if n.startswith("_segment_kernels")} == {"_segment_kernels._fit_planes_kernel",
                                                                       "_segment_kernels._rect_moments"}
@@ -52,10 +52,9 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
         "from samples import DATA_DIR\n"
         "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
         "interpolate(a, b, 0.5, fill='inpaint')\n", env)
-    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_segment_kernels._fit"))
-                and k != "_fill_kernels.axis_background"]
-    # the main process's share: the split, and the directional fill (while the helper does the pyramid)
-    assert {"_segment_kernels._split_edges_kernel", "_fill_kernels.axis_background"} <= set(compiled)
+    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_segment_kernels._fit"))]
+    # the main process's share: the segmentation's edge prefix and split, and the compositor
+    assert {"_segment_kernels._split_edges_kernel", "_composite_kernels.composite_rgbt"} <= set(compiled)
 
 
 def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):

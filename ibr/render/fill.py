@@ -249,10 +249,8 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
     if not zmax > 0:
         return filled
     h, w, nc = color.shape
-    # the directional fill first: it reads only the inputs, and on a first run the main process
-    # compiles its kernel while the helper compiles the pyramid's (#13)
+    await_kernels("fill")  # a first run: the helper may be caching the fill's kernels right now
     direct, direct_ok, direct_z = _directional_fill(color, depth, holes, axis, mix)
-    await_kernels("fill")  # a first run: the helper may be caching the pull-push kernels right now
     squarings = max(int(round(np.log2(power))), 0)
     sizes = _pyramid_sizes(h, w)
     izref = np.float32(1.0 / zmax)
