@@ -3,6 +3,7 @@ the same run (the machine is shared and noisy), plus the peak memory of a 1080p 
 
     flock /tmp/ibr-bench.lock python benchmarks/bench_speed.py            # full (with the cold start)
     python benchmarks/bench_speed.py --quick                              # smaller, no cold start
+    python benchmarks/bench_speed.py --against-issue                      # + the issue's code's first run
     python benchmarks/bench_speed.py --first-runs                         # each CLI command cold and warm
     python benchmarks/bench_speed.py --timeline interpolate               # who compiles what, when
     ibr bench speed
@@ -59,15 +60,28 @@ FIRST_RUN_COMMANDS = {
 }
 
 
-def _fresh_clone(tmp: Path) -> Path:
-    """A clone of this repository's committed state under ``tmp`` (what a new user installs)."""
+#: The commit issue #13 was filed on: its first ``ibr interpolate`` took 21.6 s and its warm run
+#: 2.2 s on the machine of that day. Timed in the same run (``--against-issue``), it turns the
+#: absolute targets into ratios that hold on a faster or slower machine: first run <= 6 / 21.6
+#: of it, warm <= 1.5 / 2.2.
+ISSUE_COMMIT = "c17f3de"
+ISSUE_FIRST_S, ISSUE_WARM_S = 21.6, 2.2
+
+
+def _fresh_clone(tmp: Path, commit: str | None = None) -> Path:
+    """A clone of this repository's committed state (or of ``commit``) under ``tmp`` (what a new
+    user installs)."""
     clone = tmp / "clone"
     subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+    if commit:
+        subprocess.run(["git", "-C", str(clone), "checkout", "-q", commit], check=True)
     return clone
 
 
 def _cli_command(argv) -> list[str]:
-    return [sys.executable, "-c", f"import cli; cli.run({argv!r})"]  # what the `ibr` command runs
+    # what the `ibr` command runs (cli.run; older commits had only cli.main)
+    return [sys.executable, "-c", f"import cli, sys; run = getattr(cli, 'run', None); "
+                                  f"sys.exit(cli.main({argv!r})) if run is None else run({argv!r})"]
 
 
 def _user_environ() -> dict:
@@ -91,12 +105,23 @@ def _cold_and_warm(clone: Path, cache: Path, argv) -> tuple[float, float]:
     return times[0], times[1]
 
 
-def cold_start(rows) -> None:
-    """First and second ``ibr interpolate`` on the bundled pair in a fresh clone and cache."""
+def cold_start(rows, against_issue: bool = False) -> None:
+    """First and second ``ibr interpolate`` on the bundled pair in a fresh clone and cache; with
+    ``against_issue`` also those of the issue's commit, timed right before (ratios to it)."""
+    argv = FIRST_RUN_COMMANDS["interpolate"]
+    if against_issue:
+        with tempfile.TemporaryDirectory(prefix="ibr-cold-") as tmp:
+            old_cold, old_warm = _cold_and_warm(_fresh_clone(Path(tmp), ISSUE_COMMIT), Path(tmp) / "numba", argv)
     with tempfile.TemporaryDirectory(prefix="ibr-cold-") as tmp:
-        cold, warm = _cold_and_warm(_fresh_clone(Path(tmp)), Path(tmp) / "numba", FIRST_RUN_COMMANDS["interpolate"])
+        cold, warm = _cold_and_warm(_fresh_clone(Path(tmp)), Path(tmp) / "numba", argv)
     rows.append(("first `ibr interpolate`, fresh clone", f"{cold:.1f} s",
                  f"warm {warm:.1f} s ({cold / warm:.1f}x); target <= 6 s, warm <= 1.5 s"))
+    if against_issue:
+        rows.append((f"  the same, issue #13's code ({ISSUE_COMMIT})", f"{old_cold:.1f} s",
+                     f"warm {old_warm:.1f} s; ours {cold / old_cold:.3f}x / {warm / old_warm:.2f}x of it "
+                     f"(targets {6 / ISSUE_FIRST_S:.3f}x / {1.5 / ISSUE_WARM_S:.2f}x: "
+                     f"{cold / old_cold * ISSUE_FIRST_S:.1f} s / {warm / old_warm * ISSUE_WARM_S:.2f} s "
+                     "on the issue's machine)"))
 
 
 def first_runs(rows) -> None:
@@ -302,6 +327,9 @@ def main(argv=None) -> int:
     p.add_argument("--timeline", choices=sorted(FIRST_RUN_COMMANDS), metavar="COMMAND",
                    help="one first run of this CLI command with each process's numba compilations on a time "
                         "line (printed, and drawn to results/timeline_COMMAND.png)")
+    p.add_argument("--against-issue", action="store_true",
+                   help=f"also time the first run of issue #13's code ({ISSUE_COMMIT}, ~40 s more) and give "
+                        "the cold start as a ratio to it (the machine's speed cancels)")
     args = p.parse_args(argv)
     if args.timeline:
         timeline(args.timeline)
@@ -314,7 +342,7 @@ def main(argv=None) -> int:
     repeats = args.repeats or (3 if args.quick else 9)
     rows: list[tuple[str, str, str]] = []
     if not args.quick:
-        cold_start(rows)
+        cold_start(rows, args.against_issue)
     perspective_rows(rows, args.quick, repeats)
     render_rows(rows, args.quick, repeats)
     if not args.quick:
