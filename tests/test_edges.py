@@ -176,6 +176,22 @@ def test_mixed_pixels_mark_both_sides_of_a_step_not_a_steep_plane():
     assert t.dtype == np.float32 and t[0, 5] < 0.1 and t[0, 0] == 1
 
 
+
+def test_one_code_steps_of_quantized_depth_are_no_silhouettes():
+    """A tilted wall in integer disparity codes (d = 20 .. 23.x, one-code steps of ~5 % in 1/z,
+    flat in between) is a staircase: without its quantization every step is taken for a
+    silhouette; with it none is, while a real step of 10 codes on the same wall still is."""
+    b, f = 0.2, 500.0
+    q = DepthQuantization.disparity(baseline=b, focal_px=f)
+    d = np.rint(20.0 + 0.2 * np.arange(18))[None, :] * np.ones((6, 1))
+    z = b * f / d
+    assert mixed_pixels(z).any()  # the staircase's steps, without the quantization
+    assert not mixed_pixels(z, quantization=q).any()
+    assert not (source_trust(z, quantization=q) < 1).any()
+    d[:, 9:] += 10  # a real step: a nearer object
+    m = mixed_pixels(b * f / d, quantization=q)
+    assert m[:, 8].all() and m[:, 9].all() and m.sum() == 12
+
 def test_trust_lets_the_clean_layer_win_where_both_agree():
     h, w = 2, 3
     ca = np.full((h, w, 3), 200.0, np.float32)

@@ -36,6 +36,10 @@ MIXED_TRUST = 0.03
 #: Codes of the depth encoding's quantization step added to the blend's depth tolerance (two
 #: sources' planes fitted to integer codes may each be half a code off; #11)
 QUANT_BLEND_CODES = 1.5
+#: Codes of the depth encoding's quantization step that a step between 4-neighbours must exceed
+#: to count as a silhouette (:func:`mixed_pixels` with ``quantization``): neighbouring planes
+#: fitted to integer codes of one smooth surface may differ by up to about a code (#11).
+QUANT_STEP_CODES = 1.5
 
 _NO_TRUST = np.ones((1, 1, 2), np.float32)
 _NO_TRUST_2D = np.ones((1, 1), np.float32)
@@ -102,11 +106,12 @@ def _sources_and_maps(sources, maps) -> tuple[list, list]:
     return sources, maps
 
 
-def _steps(q: np.ndarray, axis: int, rel: float, ratio: float) -> np.ndarray:
+def _steps(q: np.ndarray, axis: int, rel: float, ratio: float, quantization=None) -> np.ndarray:
     """Depth discontinuities between neighbours along ``axis`` of inverse depth ``q`` (NaN
     invalid): a valid/invalid pair, or ``|dq| > rel * min(q)`` and ``> ratio`` times the
     smaller of the two neighbouring differences on the line (a step, not a steep plane; the
-    smaller, so that both edges of a one-pixel-wide object count)."""
+    smaller, so that both edges of a one-pixel-wide object count), and, for quantized depth,
+    more than :data:`QUANT_STEP_CODES` codes of the encoding (``quantization``)."""
     d = np.diff(q, axis=axis)
     ad = np.abs(d)
     pad = [(0, 0), (0, 0)]
@@ -121,10 +126,13 @@ def _steps(q: np.ndarray, axis: int, rel: float, ratio: float) -> np.ndarray:
     q0, q1 = np.take(q, np.arange(n - 1), axis=axis), np.take(q, np.arange(1, n), axis=axis)
     with np.errstate(invalid="ignore"):
         step = (ad > rel * np.fmin(q0, q1)) & (ad > ratio * np.minimum(left, right))
+        if quantization is not None:
+            step &= ad > QUANT_STEP_CODES * quantization.inv_step(np.fmax(q0, q1))
     return step | (np.isnan(q0) != np.isnan(q1))
 
 
-def mixed_pixels(depth, *, rel: float = STEP_REL, ratio: float = STEP_RATIO, side: str = "both") -> np.ndarray:
+def mixed_pixels(depth, *, rel: float = STEP_REL, ratio: float = STEP_RATIO, side: str = "both",
+                 quantization=None) -> np.ndarray:
     """(H, W) bool: pixels on either side of a depth discontinuity of a source (silhouettes).
 
     A camera integrates each pixel over its area, so a pixel whose 4-neighbour lies across a
@@ -132,7 +140,9 @@ def mixed_pixels(depth, *, rel: float = STEP_REL, ratio: float = STEP_RATIO, sid
     holds a mixture of foreground and background colour while its depth is one of the two. Such
     pixels are marked on *both* sides of the step (``side="both"``), or only the farther pixel
     of each step between two valid depths (``side="far"``: the background rim, whose colour
-    carries the foreground's). Invalid pixels are never marked.
+    carries the foreground's). Invalid pixels are never marked. With ``quantization`` (the
+    :class:`~ibr.base.depth.DepthQuantization` of the depth's encoding) a step must also exceed
+    :data:`QUANT_STEP_CODES` codes: the staircase of a smooth surface is no silhouette.
     """
     if side not in ("both", "far"):
         raise ValueError(f"side: expected 'both' or 'far', got {side!r}")
@@ -147,16 +157,16 @@ def mixed_pixels(depth, *, rel: float = STEP_REL, ratio: float = STEP_RATIO, sid
     # rows (columns) keep numpy's temporaries small (a 1080p frame peaked 130 MB higher, #13)
     rows = max(1, _STRIP_PIXELS // max(w, 1))
     for r0 in range(0, h, rows) if w > 1 else ():
-        _mark(out[r0:r0 + rows], q[r0:r0 + rows], 1, rel, ratio, side)
+        _mark(out[r0:r0 + rows], q[r0:r0 + rows], 1, rel, ratio, side, quantization)
     cols = max(1, _STRIP_PIXELS // max(h, 1))
     for c0 in range(0, w, cols) if h > 1 else ():
-        _mark(out[:, c0:c0 + cols], q[:, c0:c0 + cols], 0, rel, ratio, side)
+        _mark(out[:, c0:c0 + cols], q[:, c0:c0 + cols], 0, rel, ratio, side, quantization)
     return out & ~np.isnan(q)
 
 
-def _mark(out: np.ndarray, q: np.ndarray, axis: int, rel: float, ratio: float, side: str) -> None:
+def _mark(out: np.ndarray, q: np.ndarray, axis: int, rel: float, ratio: float, side: str, quantization) -> None:
     """Mark in ``out`` the pixels of the steps of ``q`` along ``axis`` (see mixed_pixels)."""
-    step = _steps(q, axis, rel, ratio)
+    step = _steps(q, axis, rel, ratio, quantization)
     first = (slice(None, -1), slice(None)) if axis == 0 else (slice(None), slice(None, -1))
     second = (slice(1, None), slice(None)) if axis == 0 else (slice(None), slice(1, None))
     if side == "both":
@@ -170,13 +180,13 @@ def _mark(out: np.ndarray, q: np.ndarray, axis: int, rel: float, ratio: float, s
     out[second] |= step & second_far
 
 
-def source_trust(depth, *, mixed_trust: float = MIXED_TRUST) -> np.ndarray:
+def source_trust(depth, *, mixed_trust: float = MIXED_TRUST, quantization=None) -> np.ndarray:
     """(H, W) float32 trust of each source pixel's colour: ``mixed_trust`` on the mixed pixels
-    of :func:`mixed_pixels`, 1 elsewhere. Sampled bilinearly with the colour, it scales the blend
+    of :func:`mixed_pixels` (with the depth's ``quantization``, if any), 1 elsewhere. Sampled bilinearly with the colour, it scales the blend
     weights where two sources see the same surface, so a clean pixel of the other source wins
     over a silhouette pixel that carries the other surface's colour (the ghost outline)."""
     t = np.ones(np.shape(depth), np.float32)
-    t[mixed_pixels(depth)] = np.float32(mixed_trust)
+    t[mixed_pixels(depth, quantization=quantization)] = np.float32(mixed_trust)
     return t
 
 

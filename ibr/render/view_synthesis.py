@@ -110,8 +110,9 @@ class _Source:
         depth codes are no steps) or, for ``None`` (forward splat), from the raw depth."""
         t = self._trust.get(mesh_key)
         if t is None:
-            depth = self._source_depth(mesh_key)
-            t = self._trust[mesh_key] = pack_trust(source_trust(depth), mixed_pixels(depth, side="far"))
+            depth, quant = self._source_depth(mesh_key), self._quantization(mesh_key)
+            t = self._trust[mesh_key] = pack_trust(source_trust(depth, quantization=quant),
+                                                   mixed_pixels(depth, side="far", quantization=quant))
             t.setflags(write=False)
         return t
 
@@ -124,8 +125,9 @@ class _Source:
         got = self._trust.get(key)
         if got is None:
             if silhouettes:
-                depth = self._source_depth(mesh_key)
-                got = (rgbt_source(self.raw, source_trust(depth)), mixed_pixels(depth, side="far"))
+                depth, quant = self._source_depth(mesh_key), self._quantization(mesh_key)
+                got = (rgbt_source(self.raw, source_trust(depth, quantization=quant)),
+                       mixed_pixels(depth, side="far", quantization=quant))
             else:
                 got = (rgbt_source(self.raw), None)
             for x in got:
@@ -138,6 +140,11 @@ class _Source:
         """The depth of the mesh for ``mesh_key`` (planes: quantized depth codes are no steps) or,
         for ``None`` (forward splat), the raw depth."""
         return self._depth if mesh_key is None else self.meshes[mesh_key].depth()
+
+    def _quantization(self, mesh_key):
+        """The depth quantization the mesh for ``mesh_key`` was built with (None: exact depth,
+        or the forward splat's raw depth)."""
+        return None if mesh_key is None else self.meshes[mesh_key].info.get("quantization")
 
     @property
     def color(self) -> np.ndarray:
