@@ -209,6 +209,12 @@ def run(args) -> int:
         path_a, path_b = map(Path, args.views)
     else:
         raise ValueError(f"views: expected two view files A.json B.json (or none), got {len(args.views)}")
+    # the sequence options would be silently ignored for a pair (or the bundled pair)
+    for opt, given in (("--factor", args.factor is not None), ("--no-tail", args.no_tail),
+                       ("--truth", args.truth is not None), ("--report", args.report is not None)):
+        if given:
+            raise ValueError(f"{opt}: only used with a sequence (one manifest or folder of numbered views), "
+                             "not with two view files; use --frames or --t for a pair")
 
     if args.frames is not None:
         if args.frames < 1:
