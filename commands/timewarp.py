@@ -37,8 +37,8 @@ def load_cameras(path, display):
     if not p.is_file():
         raise FileNotFoundError(f"--poses: {p} does not exist")
     try:
-        doc = json.loads(p.read_text())
-    except json.JSONDecodeError as exc:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"--poses: {p} is not valid JSON ({exc})") from None
     items = doc.get("poses") if isinstance(doc, dict) else doc
     if not isinstance(items, list) or not items:

@@ -38,3 +38,14 @@ def test_interpolate_bundled_pair_refuses_report(tmp_path, capsys):
     assert cli.main(["interpolate", "--out", str(tmp_path / "o"), "--report", str(tmp_path / "r.json")]) == 1
     assert "error: --report: only used with a sequence" in _error_line(capsys, "interpolate")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_timewarp_poses_not_text_names_the_option(tmp_path, capsys):
+    """A JPEG (not UTF-8) given as --poses used to give a bare codec error."""
+    poses = tmp_path / "poses.json"
+    poses.write_bytes(b"\xff\xd8\xff\xe0" + bytes(range(256)))
+    out = tmp_path / "frames"
+    assert cli.main(["timewarp", str(DATA / "room_a.json"), "--poses", str(poses), "-o", str(out)]) == 1
+    line = _error_line(capsys, "timewarp")
+    assert line.startswith(f"ibr timewarp: error: --poses: {poses} is not valid JSON")
+    assert not out.exists()
