@@ -207,15 +207,25 @@ def run(args) -> int:
             doc = _strokes_doc(args.strokes)
             canvas = C.Canvas(resolution=args.resolution, name="strokes", **geo)
             if "background" in doc:
-                canvas.clear(C.parse_color(doc["background"]))
+                try:
+                    canvas.clear(C.parse_color(doc["background"]))
+                except (TypeError, ValueError) as exc:
+                    raise ValueError(f"--strokes: background: {exc}") from None
             painted = 0
             for i, s in enumerate(doc["strokes"]):
-                pts = np.asarray(s["points"], dtype=np.float64)
-                if pts.ndim != 2 or pts.shape[1:] != (2,) or len(pts) < 1:
-                    raise ValueError(f"--strokes: strokes[{i}]: points: expected a list of [x, y] pairs")
-                parts = target.screen_to_canvas(pts, canvas) if doc.get("space") == "screen" else [pts]
-                for part in parts:
-                    painted += C.draw_stroke(canvas, part, width=s.get("width", 4.0), color=s.get("color", "#ff3030"))
+                try:
+                    pts = np.asarray(s["points"], dtype=np.float64)
+                except (TypeError, ValueError):
+                    pts = None  # strings, nested lists of different lengths, ...
+                if pts is None or pts.ndim != 2 or pts.shape[1:] != (2,) or len(pts) < 1:
+                    raise ValueError(f"--strokes: strokes[{i}]: points: expected a list of [x, y] pairs of numbers")
+                try:
+                    parts = target.screen_to_canvas(pts, canvas) if doc.get("space") == "screen" else [pts]
+                    for part in parts:
+                        painted += C.draw_stroke(canvas, part, width=s.get("width", 4.0),
+                                                 color=s.get("color", "#ff3030"))
+                except (TypeError, ValueError) as exc:
+                    raise ValueError(f"--strokes: strokes[{i}]: {exc}") from None
             if painted == 0:
                 info("canvas: no stroke touches the canvas (nothing drawn)")
             _write_still(plan, out, target.render([canvas]), face_folder)

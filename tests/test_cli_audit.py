@@ -49,3 +49,44 @@ def test_timewarp_poses_not_text_names_the_option(tmp_path, capsys):
     line = _error_line(capsys, "timewarp")
     assert line.startswith(f"ibr timewarp: error: --poses: {poses} is not valid JSON")
     assert not out.exists()
+
+
+def _canvas_strokes(tmp_path, doc):
+    strokes = tmp_path / "strokes.json"
+    strokes.write_text(json.dumps(doc))
+    out = tmp_path / "drawn.png"
+    code = cli.main(["canvas", str(DATA / "room_a.json"), "--strokes", str(strokes), "--center", "0", "0", "4",
+                     "--normal", "0", "0", "-1", "--size", "2", "2", "-o", str(out)])
+    return code, out
+
+
+@pytest.mark.parametrize("points", [[[0, 0], [10, "a"]], [[0, 0], [1, 2, 3]], [[0, 0], None], "abc"])
+def test_canvas_stroke_points_not_numbers(tmp_path, capsys, points):
+    """A string among the points used to end in "could not convert string to float: 'a'"."""
+    code, out = _canvas_strokes(tmp_path, {"strokes": [{"points": [[5, 5]]}, {"points": points}]})
+    assert code == 1
+    assert "error: --strokes: strokes[1]: points: expected a list of [x, y] pairs" in _error_line(capsys, "canvas")
+    assert not out.exists()
+
+
+def test_canvas_stroke_colour_and_background_name_their_key(tmp_path, capsys):
+    code, out = _canvas_strokes(tmp_path, {"strokes": [{"points": [[0, 0], [9, 9]], "color": "#zz0000"}]})
+    assert code == 1 and not out.exists()
+    assert "error: --strokes: strokes[0]: color:" in _error_line(capsys, "canvas")
+    code, out = _canvas_strokes(tmp_path, {"strokes": [{"points": [[0, 0], [9, 9]]}], "background": "blue"})
+    assert code == 1 and not out.exists()
+    assert "error: --strokes: background: color:" in _error_line(capsys, "canvas")
+
+
+def test_canvas_strokes_still_draw(tmp_path, capsys):
+    """The wrapped drawing path still paints: the stroke's colour is in the output."""
+    import numpy as np
+
+    from ibr.io import read_image
+
+    code, out = _canvas_strokes(tmp_path, {"strokes": [{"points": [[0, 0], [511, 511]], "width": 12,
+                                                        "color": "#00ff00"}]})
+    assert code == 0, capsys.readouterr().err
+    img = read_image(out)
+    green = (img[..., 1] > 200) & (img[..., 0] < 60) & (img[..., 2] < 60)
+    assert green.sum() > 1000
