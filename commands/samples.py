@@ -52,6 +52,8 @@ def run(args) -> int:
 
     if out.resolve() == DATA_DIR.resolve():
         raise ValueError(f"--out: {out} is the bundled data folder itself; choose another folder")
+    if DATA_DIR.resolve() in out.resolve().parents:
+        raise ValueError(f"--out: {out} is inside the bundled data folder {DATA_DIR}; choose another folder")
 
     bundled = bundled_view_files()
     manifest = DATA_DIR / "manifest.json"

@@ -90,3 +90,16 @@ def test_canvas_strokes_still_draw(tmp_path, capsys):
     img = read_image(out)
     green = (img[..., 1] > 200) & (img[..., 0] < 60) & (img[..., 2] < 60)
     assert green.sum() > 1000
+
+
+def test_samples_refuses_a_folder_inside_the_bundled_data(capsys):
+    """``--out samples/data/rig`` used to write 17 view files into the package's data."""
+    target = DATA / "rig"
+    before = sorted(p.name for p in target.iterdir())
+    assert cli.main(["samples", "--out", str(target), "--no-middlebury"]) == 1
+    assert "is inside the bundled data folder" in _error_line(capsys, "samples")
+    assert sorted(p.name for p in target.iterdir()) == before
+    new = target / "new_sub"
+    assert cli.main(["samples", "--out", str(new), "--no-middlebury"]) == 1
+    capsys.readouterr()
+    assert not new.exists()
