@@ -41,19 +41,19 @@ def run(args) -> int:
     from commands._common import info
     from ibr.io.outputs import OutputPlan
 
-    if args.sequence:  # a synthetic sequence with its exact up-converted frames (#15)
-        from commands._sequence import run_samples_sequence
-
-        return run_samples_sequence(args)
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out: {out} exists and is not a folder")
     from samples import DATA_DIR
 
+    out = Path(args.out)
     if out.resolve() == DATA_DIR.resolve():
         raise ValueError(f"--out: {out} is the bundled data folder itself; choose another folder")
     if DATA_DIR.resolve() in out.resolve().parents:
         raise ValueError(f"--out: {out} is inside the bundled data folder {DATA_DIR}; choose another folder")
+    if args.sequence:  # a synthetic sequence with its exact up-converted frames (#15)
+        from commands._sequence import run_samples_sequence
+
+        return run_samples_sequence(args)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out: {out} exists and is not a folder")
 
     bundled = bundled_view_files()
     manifest = DATA_DIR / "manifest.json"

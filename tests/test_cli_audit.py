@@ -103,3 +103,13 @@ def test_samples_refuses_a_folder_inside_the_bundled_data(capsys):
     assert cli.main(["samples", "--out", str(new), "--no-middlebury"]) == 1
     capsys.readouterr()
     assert not new.exists()
+
+
+@pytest.mark.parametrize("where", [DATA, DATA / "rig"])
+def test_samples_sequence_refuses_the_bundled_data(capsys, where):
+    """``--sequence --out samples/data`` used to write room_walk*/room_truth* into the bundled data."""
+    before = sorted(p.name for p in where.iterdir())
+    assert cli.main(["samples", "--sequence", "--size", "48x36", "--keys", "2", "--factor", "2",
+                     "--out", str(where)]) == 1
+    assert "bundled data folder" in _error_line(capsys, "samples")
+    assert sorted(p.name for p in where.iterdir()) == before
