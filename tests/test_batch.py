@@ -91,6 +91,8 @@ def test_load_jobs_infers_outputs_and_refuses_bad_files(tmp_path):
         ([{"argv": ["warp", "a", "-o", "p.png"]}, {"argv": ["warp", "b", "-o", "./p.png"]}], "also an output"),
         ([{"argv": ["warp", "a", "-o", "p.png"], "outputs": ["q.png"]}], "does not appear"),
         ([{"argv": ["warp", "a", "-o", "p.png"], "colour": 1}], "unknown key"),
+        ([{"argv": ["warp", "a", "-o", "p.png"], "idd": "x"}], "unknown key 'idd' \\(did you mean 'id'\\?\\)"),
+        ([{"command": "ibr warp a -o 'p 2.png"}], r"jobs\[0\]: command: No closing quotation"),
         ([], "non-empty list"),
     ]
     for doc, message in cases:
@@ -99,6 +101,40 @@ def test_load_jobs_infers_outputs_and_refuses_bad_files(tmp_path):
             load_jobs(path)
     with pytest.raises(FileNotFoundError):
         load_jobs(tmp_path / "missing.json")
+
+
+def test_a_job_never_overwrites_its_own_input(tmp_path, views):
+    """Run alone, ``ibr warp A --to A -o A_color.png`` is refused; in a batch the command writes
+    into a staging folder and cannot see it, so the batch itself must refuse: directly, through a
+    link, and through an output folder that holds an input. The input stays as it was."""
+    save_view(views[0], tmp_path / "a.json")
+    color = next(tmp_path.glob("*_color.png"))
+    before = color.read_bytes()
+    (tmp_path / "link.png").symlink_to(color.name)
+    # view b's colour file is where the folder job writes its first frame
+    save_view(views[1], tmp_path / "b.json")
+    doc = json.loads((tmp_path / "b.json").read_text())
+    (tmp_path / "frames").mkdir()
+    first = "frames/frame_000_t0.000.png"
+    (tmp_path / doc["color"]).rename(tmp_path / first)
+    doc["color"] = first
+    (tmp_path / "b.json").write_text(json.dumps(doc))
+    b_before = (tmp_path / first).read_bytes()
+    jobs = [{"id": "direct", "argv": ["warp", "a.json", "--to", "a.json", "-o", color.name]},
+            {"id": "link", "argv": ["warp", "a.json", "--to", "a.json", "-o", "link.png"]},
+            {"id": "folder", "argv": ["interpolate", "b.json", "a.json", "--frames", "2", "--out", "frames"]},
+            {"id": "fine", "argv": ["interpolate", "b.json", "a.json", "--frames", "2", "--out", "other"]}]
+    path = tmp_path / "jobs.json"
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 1, "jobs": jobs}))
+    report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=1)
+    status = {r["id"]: (r["status"], r["error"]) for r in report.results}
+    assert status["direct"][0] == "failed" and "is an input of the job" in status["direct"][1]
+    assert status["link"][0] == "failed" and "is an input of the job" in status["link"][1]
+    assert status["folder"][0] == "failed" and "is an input of the job" in status["folder"][1]
+    assert color.read_bytes() == before and (tmp_path / first).read_bytes() == b_before
+    assert status["fine"][0] == "done", status["fine"]  # the same job into another folder
+    assert sorted(p.name for p in (tmp_path / "other").iterdir()) == ["frame_000_t0.000.png", "frame_001_t1.000.png"]
+    assert not [p for p in tmp_path.rglob(".*") if p.name.startswith(STAGE_PREFIX)]
 
 
 # --------------------------------------------------------------------------- local pool

@@ -28,7 +28,10 @@ Running a job (:func:`run_job`, on any worker) is idempotent and leaves no parti
    succeeds are the staged files renamed into place (each rename atomic; files already in an output
    folder that the command did not write are left alone); the record, written
    atomically after them, marks the job done. A worker killed at any point leaves at most a
-   staging folder, which the next attempt of the job removes before it starts.
+   staging folder, which the next attempt of the job removes before it starts. A job whose
+   output (or a file of its output folder) is one of its inputs, after resolving links, fails
+   before anything is renamed: the command itself cannot see that while it writes into the
+   staging folder.
 
 Records live in one folder (default ``.ibr-batch/`` beside the batch file): ``<id>.json`` with
 the command line, input and output checksums, the run and attempt that committed it, and
@@ -52,6 +55,7 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..base.validate import check_keys
 from ..io.images import atomic_path
 from .files import referenced_files
 
@@ -145,15 +149,16 @@ def _job_from(entry, index: int, base: Path) -> Job:
         entry = {"command": entry} if isinstance(entry, str) else {"argv": entry}
     if not isinstance(entry, dict):
         raise ValueError(f"{where}: expected an object with 'argv' or 'command', got {type(entry).__name__}")
-    unknown = set(entry) - {"id", "argv", "command", "outputs", "inputs", "cwd"}
-    if unknown:
-        raise ValueError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}")
+    check_keys(where, entry, ("id", "argv", "command", "outputs", "inputs", "cwd"))
     if ("argv" in entry) == ("command" in entry):
         raise ValueError(f"{where}: give exactly one of 'argv' (a list) and 'command' (a string)")
     if "command" in entry:
         if not isinstance(entry["command"], str):
             raise ValueError(f"{where}: 'command' must be a string, got {entry['command']!r}")
-        argv = shlex.split(entry["command"])
+        try:
+            argv = shlex.split(entry["command"])
+        except ValueError as exc:  # an unclosed quote
+            raise ValueError(f"{where}: command: {exc} in {entry['command']!r}") from None
     else:
         argv = entry["argv"]
         if not isinstance(argv, list) or not all(isinstance(a, str) for a in argv):
@@ -243,7 +248,9 @@ def file_sha256(path) -> str:
     return h.hexdigest()
 
 
-def _input_checksums(job: Job) -> dict[str, str]:
+def _input_files(job: Job) -> list[Path]:
+    """Every input file of ``job`` (sorted): the command line's non-output values that exist,
+    what they name (:func:`ibr.sequence.referenced_files`), and ``inputs``."""
     cwd = Path(job.cwd)
     outs = set(job.outputs)
     names = [v for v in job.argv[1:] if v not in outs and not v.startswith("-")]
@@ -257,7 +264,19 @@ def _input_checksums(job: Job) -> dict[str, str]:
     for n in job.inputs:
         if not (cwd / n).exists():
             raise FileNotFoundError(f"job {job.id}: input {n!r} does not exist in {cwd}")
-    return {os.path.relpath(p, cwd): file_sha256(p) for p in sorted(files)}
+    return sorted(files)
+
+
+def _check_not_inputs(job: Job, finals, inputs) -> None:
+    """Refuse (ValueError) when a file about to be written, ``finals``, is an input of the job
+    (``inputs``), after resolving links: the command run alone refuses that itself, but in a
+    batch it writes into a staging folder and cannot see it (#12, no data loss)."""
+    real = {os.path.realpath(p): p for p in inputs}
+    for f in finals:
+        hit = real.get(os.path.realpath(f))
+        if hit is not None:
+            raise ValueError(f"job {job.id}: output {os.path.relpath(f, job.cwd)!r} is an input of the job "
+                             f"({os.path.relpath(hit, job.cwd)}); refusing to overwrite it")
 
 
 # --------------------------------------------------------------------------- records
@@ -397,7 +416,10 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
     try:
         records.mkdir(parents=True, exist_ok=True)
         result["interrupted_attempts"] = _remove_stale_stages(job)
-        inputs = _input_checksums(job)
+        input_files = _input_files(job)
+        cwd = Path(job.cwd)
+        _check_not_inputs(job, [cwd / o for o in job.outputs], input_files)
+        inputs = {os.path.relpath(p, cwd): file_sha256(p) for p in input_files}
         record = _read_record(_record_path(records, job))
         if _up_to_date(record, job, inputs):
             result["status"] = "done" if record.get("run") == run_id else "skipped"
@@ -429,8 +451,14 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
                 shutil.rmtree(s, ignore_errors=True)
             result["error"] = f"the command succeeded but wrote none of its outputs {list(job.outputs)}"
             return result
+        try:  # an output folder's files too (the command named only the folder)
+            _check_not_inputs(job, [s.parent / p.relative_to(s) for s in stages for p in s.rglob("*") if p.is_file()],
+                              input_files)
+        except ValueError:
+            for s in stages:
+                shutil.rmtree(s, ignore_errors=True)
+            raise
         finals = _commit(stages)
-        cwd = Path(job.cwd)
         outputs = {os.path.relpath(p, cwd): file_sha256(p) for p in finals}
         doc = {"format": RECORD_FORMAT, "version": 1, "id": job.id, "argv": list(job.argv), "cwd": job.cwd,
                "inputs": inputs, "outputs": outputs, "run": run_id, "attempt": token, "worker": result["worker"],
