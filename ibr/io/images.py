@@ -198,7 +198,7 @@ def read_image(path, *, what: str = "image") -> np.ndarray:
     config.attribute("oiio:UnassociatedAlpha", 1)  # return RGBA as stored, not premultiplied
     inp = oiio.ImageInput.open(str(path), config)
     if inp is None:
-        raise ValueError(f"{what}: cannot read {path}: {oiio.geterror() or 'unknown format'}")
+        raise ValueError(f"{what}: cannot read {path}: {_one_line(oiio.geterror()) or 'unknown format'}")
     try:
         spec = inp.spec()
         # the size ceilings, before the pixels are allocated (#12)
@@ -209,7 +209,7 @@ def read_image(path, *, what: str = "image") -> np.ndarray:
     finally:
         inp.close()
     if pixels is None or err or not isinstance(pixels, np.ndarray):
-        raise ValueError(f"{what}: corrupt or unreadable image {path}: {err or oiio.geterror()}")
+        raise ValueError(f"{what}: corrupt or unreadable image {path}: {_one_line(err or oiio.geterror())}")
     if pixels.dtype in (np.float16, np.float64):
         pixels = pixels.astype(np.float32)
     elif pixels.dtype == np.int8 or pixels.dtype == np.int16 or pixels.dtype == np.int32:
@@ -217,6 +217,11 @@ def read_image(path, *, what: str = "image") -> np.ndarray:
     if pixels.ndim == 3 and pixels.shape[2] == 1:
         pixels = pixels[..., 0]
     return np.ascontiguousarray(pixels)
+
+
+def _one_line(message) -> str:
+    """OpenImageIO's error text on one line (a corrupt PNG gave three, #12: errors are one line)."""
+    return " ".join(str(message or "").split())
 
 
 def _check_write_dtype(path: Path, arr: np.ndarray, name: str) -> str:
@@ -258,7 +263,7 @@ def write_image(path, array) -> None:
     with atomic_path(path) as tmp:
         out = oiio.ImageOutput.create(str(tmp))
         if out is None:
-            raise ValueError(f"array: cannot create a writer for {path}: {oiio.geterror()}")
+            raise ValueError(f"array: cannot create a writer for {path}: {_one_line(oiio.geterror())}")
         spec = oiio.ImageSpec(w, h, c, typedesc)
         spec.attribute("oiio:UnassociatedAlpha", 1)  # RGBA arrays are straight (not premultiplied)
         if ext in (".jpg", ".jpeg"):
@@ -267,9 +272,9 @@ def write_image(path, array) -> None:
             spec.attribute("png:compressionLevel", PNG_COMPRESSION_LEVEL)
         try:
             if not out.open(str(tmp), spec):
-                raise OSError(f"{path}: cannot open for writing: {out.geterror()}")
+                raise OSError(f"{path}: cannot open for writing: {_one_line(out.geterror())}")
             if not out.write_image(np.ascontiguousarray(arr)):
-                raise OSError(f"{path}: write failed: {out.geterror()}")
+                raise OSError(f"{path}: write failed: {_one_line(out.geterror())}")
         finally:
             out.close()
 
@@ -297,7 +302,7 @@ def depth_channel_names(path, *, what: str = "depth") -> list[str]:
     oiio = _oiio()
     inp = oiio.ImageInput.open(str(path))
     if inp is None:
-        raise ValueError(f"{what}: cannot read {path}: {oiio.geterror() or 'unknown format'}")
+        raise ValueError(f"{what}: cannot read {path}: {_one_line(oiio.geterror()) or 'unknown format'}")
     try:
         return list(inp.spec().channelnames)
     finally:
