@@ -360,6 +360,18 @@ def run_stereo(args) -> int:
 
 
 # --------------------------------------------------------------------------- samples
+#: Defaults of the --sequence options of ``ibr samples`` (given without --sequence, any other
+#: value is an error rather than silently ignored).
+SAMPLES_SEQUENCE_DEFAULTS = {"scene": "room", "keys": 10, "factor": 4, "size": "320x240", "fps": 10.0}
+
+
+def check_samples_sequence_unused(args) -> None:
+    """Refuse --scene/--keys/--factor/--size/--fps of ``ibr samples`` without --sequence."""
+    for name, default in SAMPLES_SEQUENCE_DEFAULTS.items():
+        if getattr(args, name) != default:
+            raise ValueError(f"--{name}: only used with --sequence (a synthetic sequence instead of the bundled views)")
+
+
 def add_samples_arguments(parser) -> None:
     """``ibr samples --sequence``: a short synthetic RGB-D sequence with exact in-between frames."""
     from commands._common import frame_rate, number_in
@@ -368,12 +380,14 @@ def add_samples_arguments(parser) -> None:
     g.add_argument("--sequence", action="store_true",
                    help="write a camera path through a synthetic scene: key views (SCENE_walk.json) and the exact "
                         "frames of their up-conversion by --factor (SCENE_truth.json, the ground truth)")
-    g.add_argument("--scene", default="room", help="synthetic scene of the sequence (default: %(default)s)")
-    g.add_argument("--keys", type=number_in(2, 10000, integer=True, what="a number of key views"), default=10,
+    d = SAMPLES_SEQUENCE_DEFAULTS
+    g.add_argument("--scene", default=d["scene"], help="synthetic scene of the sequence (default: %(default)s)")
+    g.add_argument("--keys", type=number_in(2, 10000, integer=True, what="a number of key views"), default=d["keys"],
                    help="number of key views (default: %(default)s)")
-    g.add_argument("--factor", type=FACTOR, default=4, help="up-conversion factor of the ground truth (default: %(default)s)")
-    g.add_argument("--size", default="320x240", metavar="WxH", help="image size (default: %(default)s)")
-    g.add_argument("--fps", type=frame_rate, default=10.0, help="frame rate of the key views (default: %(default)s)")
+    g.add_argument("--factor", type=FACTOR, default=d["factor"],
+                   help="up-conversion factor of the ground truth (default: %(default)s)")
+    g.add_argument("--size", default=d["size"], metavar="WxH", help="image size (default: %(default)s)")
+    g.add_argument("--fps", type=frame_rate, default=d["fps"], help="frame rate of the key views (default: %(default)s)")
 
 
 def _size(text: str) -> tuple[int, int]:

@@ -56,6 +56,9 @@ def run(args) -> int:
         plan.add_input("INPUT", args.input)
         # the layout of the output is known before reading: folder of faces or one image
         files_out = args.layout == "files" or (args.layout is None and out.suffix == "")
+        if not files_out and args.ext != ".png":
+            raise ValueError(f"--ext: only used for a folder of face files (--layout files or -o without an "
+                             f"extension); {out.name} is one image, its extension chooses the format")
         if files_out:
             if args.depth and ext.lower() not in float_exts:
                 raise ValueError(f"--ext: depth faces are float; use one of {', '.join(float_exts)}, got {ext}")
@@ -68,6 +71,9 @@ def run(args) -> int:
 
         pano, in_layout = read_panorama(args.input, layout=args.input_layout)
         if in_layout == "equirect":
+            if args.width is not None:
+                raise ValueError("--width: only used when converting a cubemap back to equirect; INPUT is "
+                                 "equirect (the faces' size is --face-size)")
             h, w = pano.shape[:2]
             size = args.face_size if args.face_size is not None else math.ceil(w / math.pi)
             layout = args.layout or ("files" if out.suffix == "" else "dice")

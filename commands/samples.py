@@ -48,10 +48,11 @@ def run(args) -> int:
         raise ValueError(f"--out: {out} is the bundled data folder itself; choose another folder")
     if DATA_DIR.resolve() in out.resolve().parents:
         raise ValueError(f"--out: {out} is inside the bundled data folder {DATA_DIR}; choose another folder")
-    if args.sequence:  # a synthetic sequence with its exact up-converted frames (#15)
-        from commands._sequence import run_samples_sequence
+    from commands._sequence import check_samples_sequence_unused, run_samples_sequence
 
+    if args.sequence:  # a synthetic sequence with its exact up-converted frames (#15)
         return run_samples_sequence(args)
+    check_samples_sequence_unused(args)
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out: {out} exists and is not a folder")
 

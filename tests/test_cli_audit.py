@@ -113,3 +113,19 @@ def test_samples_sequence_refuses_the_bundled_data(capsys, where):
                      "--out", str(where)]) == 1
     assert "bundled data folder" in _error_line(capsys, "samples")
     assert sorted(p.name for p in where.iterdir()) == before
+
+
+def test_options_that_would_be_ignored_are_refused(tmp_path, capsys):
+    """cubemap --ext for a one-image output, cubemap --width for equirect input and samples'
+    sequence options without --sequence were accepted and ignored (exit 0)."""
+    pano = DATA / "rig" / "capture_pano_color.png"
+    assert cli.main(["cubemap", str(pano), "-o", str(tmp_path / "c.png"), "--ext", ".exr"]) == 1
+    assert "error: --ext: only used for a folder of face files" in _error_line(capsys, "cubemap")
+    assert cli.main(["cubemap", str(pano), "-o", str(tmp_path / "c.png"), "--width", "64"]) == 1
+    assert "error: --width: only used when converting a cubemap back" in _error_line(capsys, "cubemap")
+    assert cli.main(["samples", "--out", str(tmp_path / "s"), "--keys", "3"]) == 1
+    assert "error: --keys: only used with --sequence" in _error_line(capsys, "samples")
+    assert list(tmp_path.iterdir()) == []
+    # the same options where they are used still work
+    assert cli.main(["cubemap", str(pano), "-o", str(tmp_path / "faces"), "--ext", ".tif", "--face-size", "16"]) == 0
+    assert sorted(p.suffix for p in (tmp_path / "faces").iterdir()) == [".tif"] * 6
