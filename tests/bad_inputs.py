@@ -152,7 +152,7 @@ _add("color escapes the folder", V, "error", r"'color': expected a file name ins
 _add("color absolute path", V, "error", r"'color': expected a file name inside", mutate=_set(("color",), "/etc/hostname"))
 _add("color missing file", V, "error", r"'color' refers to a missing file", mutate=_set(("color",), "nope.png"))
 _add("color not an image", V, "error", r"'color': cannot read|corrupt", mutate=_set(("color",), "notes.txt"))
-_add("color a folder", V, "error", r"'color' refers to a missing file", mutate=_set(("color",), "sub"))
+_add("color a folder", V, "error", r"'color' refers to a folder, not an image file", mutate=_set(("color",), "sub"))
 _add("color of another size", V, "error", r"does not match the color image", mutate=_set(("color",), "odd.png"))
 _add("depth a string", V, "error", r"'depth' must be null or an object", mutate=_set(("depth",), "a_depth.exr"))
 _add("depth without path", V, "error", r"'depth' must be null or an object with a 'path'", mutate=_set(("depth",), {}))

@@ -181,6 +181,11 @@ def _json_number(x: float):
     return "inf" if isinstance(x, float) and math.isinf(x) else x
 
 
+
+def _not_a_file(path: Path) -> str:
+    """How a view file's reference that is no file is described: a folder or a missing file."""
+    return f"a folder, not an image file: {path}" if path.is_dir() else f"a missing file {path}"
+
 def load_view(path) -> View:
     """Load a view file (JSON sidecar + color + optional depth) as a :class:`~ibr.base.view.View`.
 
@@ -226,7 +231,7 @@ def load_view(path) -> View:
 
     color_path = path.parent / doc["color"]
     if not color_path.is_file():
-        raise FileNotFoundError(f"{where}: 'color' refers to a missing file {color_path}")
+        raise FileNotFoundError(f"{where}: 'color' refers to {_not_a_file(color_path)}")
     color = read_image(color_path, what=f"{where}: 'color'")
     if color.ndim == 3 and color.shape[2] not in (3, 4):
         raise ValueError(f"{where}: 'color' {color_path} has {color.shape[2]} channels; expected 1, 3 or 4")
@@ -249,7 +254,7 @@ def load_view(path) -> View:
         p = _check_depth_params(encoding, params, dwhere)
         depth_path = path.parent / spec["path"]
         if not depth_path.is_file():
-            raise FileNotFoundError(f"{where}: 'depth.path' refers to a missing file {depth_path}")
+            raise FileNotFoundError(f"{where}: 'depth.path' refers to {_not_a_file(depth_path)}")
         stored = _read_stored_depth(depth_path, encoding, p, f"{where}: 'depth.path'", channel)
         if stored.shape != color.shape[:2]:
             raise ValueError(f"{where}: depth {depth_path.name} is {stored.shape[1]}x{stored.shape[0]} but color "
