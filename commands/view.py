@@ -9,6 +9,11 @@ from pathlib import Path
 
 from ._common import info, progress, terminate_as_interrupt
 
+#: What ``--layout`` takes: panorama.files.read_panorama's layouts of one image (panorama.layouts'
+#: single-image LAYOUTS and their aliases), listed here so that building the parser imports no
+#: panorama code; tests/test_cli_audit.py checks it against panorama.layouts.
+PANO_LAYOUTS = ("auto", "equirect", "horizon", "vstrip", "dice", "hstrip", "exr", "cross", "hcross")
+
 HELP = "render a perspective view of a panorama (equirect, cubemap or face folder), a tour, or serve a web viewer"
 
 
@@ -21,7 +26,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("-o", "--output", default=None,
                         help="view image (.png/.jpg/.tif/.exr); with --tour a .gif/.mp4 (frames go "
                         "to <stem>_frames/) or a folder for frames only")
-    parser.add_argument("--layout", default=None, help="layout of PANO (default: from its shape)")
+    parser.add_argument("--layout", default=None, choices=PANO_LAYOUTS, metavar="LAYOUT",
+                        help=f"layout of PANO: {', '.join(PANO_LAYOUTS)} (default: from its shape)")
     parser.add_argument("--yaw", type=finite_float, default=0.0,
                         help="degrees, longitude of the view centre (0 = +z, 90 = +x, right)")
     parser.add_argument("--pitch", type=finite_float, default=0.0, help="degrees, +90 looks straight up")

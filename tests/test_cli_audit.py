@@ -129,3 +129,18 @@ def test_options_that_would_be_ignored_are_refused(tmp_path, capsys):
     # the same options where they are used still work
     assert cli.main(["cubemap", str(pano), "-o", str(tmp_path / "faces"), "--ext", ".tif", "--face-size", "16"]) == 0
     assert sorted(p.suffix for p in (tmp_path / "faces").iterdir()) == [".tif"] * 6
+
+
+def test_view_layout_is_a_usage_error_and_lists_what_read_panorama_takes(tmp_path, capsys):
+    """``ibr view --layout foo`` ended as a runtime error (exit 1); argparse now refuses it
+    (exit 2, naming --layout), and every listed layout is one read_panorama accepts."""
+    from commands.view import PANO_LAYOUTS
+    from panorama.layouts import LAYOUTS, _ALIASES
+
+    assert set(PANO_LAYOUTS) == {"auto", "equirect"} | (set(LAYOUTS) - {"list", "dict"}) | set(_ALIASES)
+    pano = DATA / "rig" / "capture_pano_color.png"
+    assert cli.main(["view", str(pano), "--layout", "foo", "-o", str(tmp_path / "v.png")]) == 2
+    assert "argument --layout: invalid choice: 'foo'" in capsys.readouterr().err
+    assert cli.main(["view", str(pano), "--layout", "equirect", "--width", "64", "--height", "48",
+                     "-o", str(tmp_path / "v.png")]) == 0
+    assert (tmp_path / "v.png").is_file()
