@@ -252,15 +252,19 @@ def test_every_output_option_pointed_at_every_input(base, tmp_path, cmd, opt, ta
     assert not list(d.rglob(STAGING_PREFIX + "*"))
 
 
-def test_samples_refuses_the_bundled_folder_and_leaves_it_intact(capsys):
+def test_samples_refuses_the_bundled_folder_and_leaves_it_intact(capsys, tmp_path):
     from samples import DATA_DIR
 
     before = digest(DATA_DIR)
     assert cli.main(["samples", "--out", str(DATA_DIR)]) == 1
     assert "bundled data folder itself" in capsys.readouterr().err
     assert cli.main(["samples", "--out", str(DATA_DIR / "room_a.json")]) == 1
-    assert "is not a folder" in capsys.readouterr().err
+    assert "is inside the bundled data folder" in capsys.readouterr().err
     assert digest(DATA_DIR) == before
+    (tmp_path / "f.txt").write_text("x")
+    assert cli.main(["samples", "--out", str(tmp_path / "f.txt")]) == 1
+    assert "is not a folder" in capsys.readouterr().err
+    assert (tmp_path / "f.txt").read_text() == "x"
 
 
 # --------------------------------------------------------------------------- killing a long command
