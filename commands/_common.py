@@ -148,5 +148,5 @@ def note_first_run(*modules: str, warm: str = "frame") -> bool:
     from ibr.base.first_run import start_helper
 
     start_helper(warm)
-    info("first run: compiling the numba kernels (5-10 s, once; later runs load them from the cache)")
+    info("first run: compiling the numba kernels (5-15 s on two cores, once; later runs load them from the cache)")
     return True
