@@ -188,7 +188,12 @@ def area_prefilter(img: np.ndarray, ratio: float) -> np.ndarray:
     elif w == h:  # cube face: stay square
         nh = nw
     work = _as_remappable(img)
-    out = cv2.resize(work, (nw, nh), interpolation=cv2.INTER_AREA)
+    if work.ndim == 3 and work.shape[2] > 4:  # cv2.resize takes at most 4 channels: 4 at a time
+        out = np.concatenate([cv2.resize(np.ascontiguousarray(work[..., c:c + 4]), (nw, nh),
+                                         interpolation=cv2.INTER_AREA).reshape(nh, nw, -1)
+                              for c in range(0, work.shape[2], 4)], axis=2)
+    else:
+        out = cv2.resize(work, (nw, nh), interpolation=cv2.INTER_AREA)
     if img.ndim == 3 and out.ndim == 2:
         out = out[..., None]
     return out.astype(img.dtype) if out.dtype != img.dtype else out

@@ -49,3 +49,26 @@ def test_warp_rotation_identity_is_exact():
     cam = Camera.from_fov(8, 6, hfov_deg=90)
     img = _img()
     np.testing.assert_array_equal(timewarp_mod.warp_rotation(img, cam, cam).color, img)
+
+
+# ----------------------------------------------------------- panoramas with more than 4 channels
+def test_panorama_five_channels_match_per_channel_result():
+    import panorama
+
+    rng = np.random.default_rng(1)
+    eq = (rng.random((32, 64, 5)) * 255).astype(np.uint8)
+    # was: OpenCV "(-215:Assertion failed) func != 0 && cn <= 4 in function 'resize'"
+    for layout in ("dict", "horizon", "dice"):
+        five = panorama.equirect_to_cubemap(eq, 4, layout=layout)
+        ref = [panorama.equirect_to_cubemap(np.ascontiguousarray(eq[..., c:c + 1]), 4, layout=layout)
+               for c in range(5)]
+        if layout == "dict":
+            for k in five:
+                np.testing.assert_array_equal(five[k], np.concatenate([r[k] for r in ref], axis=2))
+        else:
+            np.testing.assert_array_equal(five, np.concatenate(ref, axis=2))
+    faces = panorama.equirect_to_cubemap(eq, 16, layout="list")
+    back = panorama.cubemap_to_equirect(faces, 16, 8, layout="list")
+    ref = np.concatenate([panorama.cubemap_to_equirect([np.ascontiguousarray(f[..., c:c + 1]) for f in faces],
+                                                       16, 8, layout="list") for c in range(5)], axis=2)
+    np.testing.assert_array_equal(back, ref)
