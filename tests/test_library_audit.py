@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -72,3 +74,36 @@ def test_panorama_five_channels_match_per_channel_result():
     ref = np.concatenate([panorama.cubemap_to_equirect([np.ascontiguousarray(f[..., c:c + 1]) for f in faces],
                                                        16, 8, layout="list") for c in range(5)], axis=2)
     np.testing.assert_array_equal(back, ref)
+
+
+# ----------------------------------------------------------- cameras and views
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), "a", None, True])
+def test_camera_size_refuses_non_numbers_naming_the_argument(bad):
+    # was: "cannot convert float NaN to integer", OverflowError, "invalid literal for int()"
+    with pytest.raises(ValueError, match="^" + re.escape(f"width: expected a positive integer, got {bad!r}") + "$"):
+        Camera(100, 100, 1, 1, bad, 4)
+    with pytest.raises(ValueError, match=r"^height: expected a positive integer"):
+        Camera(100, 100, 1, 1, 4, bad)
+
+
+@pytest.mark.parametrize("value", [1e40, 1e-50])
+def test_view_refuses_float64_depth_outside_float32_range(value):
+    from ibr.base.view import View
+
+    cam = Camera(100, 100, 1.5, 1.5, 4, 4)
+    depth = np.full((4, 4), 2.0)
+    depth[1, 2] = value  # was: cast to float32 inf / 0, then silently NaN (no depth)
+    want = f"depth: valid values must lie in [1e-06, 1e+09] scene units, got {min(value, 2.0):.6g}..{max(value, 2.0):.6g} "
+    with pytest.raises(ValueError, match="^" + re.escape(want)):
+        View(np.zeros((4, 4, 3), np.uint8), depth, cam)
+
+
+def test_view_depth_float64_in_range_and_invalid_values():
+    from ibr.base.view import View
+
+    cam = Camera(100, 100, 1.5, 1.5, 4, 4)
+    depth = np.full((4, 4), 2.5)
+    depth[0, :4] = [np.nan, 0.0, -1e40, np.inf]
+    v = View(np.zeros((4, 4, 3), np.uint8), depth, cam)
+    assert v.depth.dtype == np.float32
+    assert np.isnan(v.depth[0]).all() and (v.depth[1:] == np.float32(2.5)).all()

@@ -90,7 +90,8 @@ class Camera:
         set_(self, "cy", check_finite_scalar("cy", self.cy))
         for name in ("width", "height"):
             value = getattr(self, name)
-            if isinstance(value, bool) or int(value) != value or int(value) < 1:
+            if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating))
+                    or not np.isfinite(value) or int(value) != value or int(value) < 1):
                 raise ValueError(f"{name}: expected a positive integer, got {value!r}")
             set_(self, name, int(value))
         check_image_size("camera", self.width, self.height)  # ceilings before any image is allocated (#12)
