@@ -58,15 +58,18 @@ class View:
                     f"depth: size {depth.shape[1]}x{depth.shape[0]} does not match color size "
                     f"{color.shape[1]}x{color.shape[0]}"
                 )
-            depth = depth.astype(np.float32, copy=True)
             with np.errstate(invalid="ignore"):
-                depth[~(np.isfinite(depth) & (depth > 0))] = np.nan
-            if not np.isnan(depth).all():
-                lo, hi = float(np.nanmin(depth)), float(np.nanmax(depth))
-                if lo < np.float32(DEPTH_RANGE[0]) or hi > np.float32(DEPTH_RANGE[1]):  # float32 bounds
+                invalid = ~(np.isfinite(depth) & (depth > 0))
+            if not invalid.all():  # range checked before the float32 cast, which would turn a float64
+                valid = depth[~invalid]  # 1e40 into inf and 1e-50 into 0, both then NaN, silently
+                lo, hi = float(valid.min()), float(valid.max())
+                if lo < float(np.float32(DEPTH_RANGE[0])) or hi > float(np.float32(DEPTH_RANGE[1])):  # float32 bounds
                     raise ValueError(f"depth: valid values must lie in [{DEPTH_RANGE[0]:g}, {DEPTH_RANGE[1]:g}] "
                                      f"scene units, got {lo:.6g}..{hi:.6g} (rescale the depth, e.g. a view "
                                      "file's depth 'scale')")
+            with np.errstate(over="ignore"):  # only invalid values (e.g. -1e40) can overflow
+                depth = depth.astype(np.float32, copy=True)
+            depth[invalid] = np.nan
             object.__setattr__(self, "depth", depth)
 
     @property
