@@ -107,3 +107,24 @@ def test_view_depth_float64_in_range_and_invalid_values():
     v = View(np.zeros((4, 4, 3), np.uint8), depth, cam)
     assert v.depth.dtype == np.float32
     assert np.isnan(v.depth[0]).all() and (v.depth[1:] == np.float32(2.5)).all()
+
+
+# ----------------------------------------------------------- canvas
+@pytest.mark.parametrize("resolution", [None, (8, 8)])
+@pytest.mark.parametrize("dtype", [np.int64, np.bool_, np.int16])
+def test_canvas_refuses_non_colour_dtypes_with_or_without_resampling(dtype, resolution):
+    import ibr.canvas as cv
+
+    img = _img(40, 60).astype(dtype)
+    # was: refused without resolution, but with a resolution resample() turned it into float32 first and the
+    # canvas silently held the raw integer codes (88..154) as float colours
+    with pytest.raises(ValueError, match=rf"^image: expected uint8, uint16 or float pixels, got {np.dtype(dtype).name}$"):
+        cv.canvas_from_image(img, [0, 0, 3], [0, 0, -1], [1, 1], resolution=resolution)
+
+
+def test_canvas_uint8_resampled_keeps_values():
+    import ibr.canvas as cv
+
+    img = np.full((40, 60, 3), 77, np.uint8)
+    c = cv.canvas_from_image(img, [0, 0, 3], [0, 0, -1], [1, 1], resolution=(8, 8))
+    assert c.rgba.dtype == np.uint8 and (c.rgba[..., :3] == 77).all() and (c.rgba[..., 3] == 255).all()

@@ -125,6 +125,8 @@ def set_image(canvas: Canvas, image) -> None:
     if not isinstance(canvas, Canvas):
         raise TypeError(f"canvas: expected a Canvas, got {type(canvas).__name__}")
     img = check_image("image", image, channels=(1, 2, 3, 4))
+    if img.dtype.kind != "f" and img.dtype not in (np.uint8, np.uint16):  # before resample() makes it float32
+        raise ValueError(f"image: expected uint8, uint16 or float pixels, got {img.dtype}")
     w, h = canvas.resolution
     if img.shape[:2] != (h, w):
         img = resample(img, (w, h))
