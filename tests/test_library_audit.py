@@ -128,3 +128,22 @@ def test_canvas_uint8_resampled_keeps_values():
     img = np.full((40, 60, 3), 77, np.uint8)
     c = cv.canvas_from_image(img, [0, 0, 3], [0, 0, -1], [1, 1], resolution=(8, 8))
     assert c.rgba.dtype == np.uint8 and (c.rgba[..., :3] == 77).all() and (c.rgba[..., 3] == 255).all()
+
+
+# ----------------------------------------------------------- warp / interpolate options
+@pytest.mark.parametrize("bad", [5, [("threshold", 1.0)], "threshold=1"])
+def test_warp_and_interpolate_refuse_non_dict_mesh_options(bad):
+    import ibr
+    from ibr.synth import make_scene, render, scene_cameras
+
+    cams = scene_cameras("room", width=32, height=24)
+    scene = make_scene("room")
+    a, b = render(scene, cams[0]), render(scene, cams[-1])
+    want = f"^mesh_options: expected a dict of ibr.build_mesh options, got {type(bad).__name__}$"
+    with pytest.raises(TypeError, match=want):  # was "'int' object is not iterable" and the like
+        ibr.warp(a, b.camera, mesh_options=bad)
+    with pytest.raises(TypeError, match=want):
+        ibr.interpolate(a, b, 0.5, mesh_options=bad)
+    ok = ibr.warp(a, b.camera, mesh_options={"max_error_px": 0.5})
+    ref = ibr.warp(a, b.camera, mesh_options=None)
+    np.testing.assert_array_equal(ok.color, ref.color)

@@ -337,6 +337,15 @@ def _nothing_seen(camera: Camera, names, t) -> ValueError:
     )
 
 
+def _check_mesh_options(mesh_options) -> dict:
+    """``mesh_options`` as a new dict (None -> {}), or a TypeError naming it."""
+    if mesh_options is None:
+        return {}
+    if not isinstance(mesh_options, dict):
+        raise TypeError(f"mesh_options: expected a dict of ibr.build_mesh options, got {type(mesh_options).__name__}")
+    return dict(mesh_options)
+
+
 # ------------------------------------------------------------------------- public calls
 def warp(
     view: View,
@@ -397,7 +406,7 @@ def warp(
     check_choice("lod", lod, LODS)
     _check_source(view, "view")
     camera = _check_target(camera)
-    opts = _lod_options(view, [camera], dict(mesh_options or {}), lod) if method == "mesh" else {}
+    opts = _lod_options(view, [camera], _check_mesh_options(mesh_options), lod) if method == "mesh" else {}
     comp = _render([view], camera, [1.0], method=method, footprint=footprint, splat=splat,
                    mesh_options=[opts], interpolation=interpolation, composite_mode="blend",
                    depth_tol=0.02, dtype=view.color.dtype)
@@ -463,7 +472,7 @@ def iter_interpolate(
             f"{view_a.color.dtype} {view_a.color.shape}; convert both to one dtype and layout"
         )
     cams, ts, _ = _targets(view_a, view_b, t)
-    base = dict(mesh_options or {})
+    base = _check_mesh_options(mesh_options)
     # level of detail from the span of the whole call (one mesh per source for every frame)
     opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
     previous = None
