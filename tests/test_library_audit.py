@@ -147,3 +147,110 @@ def test_warp_and_interpolate_refuse_non_dict_mesh_options(bad):
     ok = ibr.warp(a, b.camera, mesh_options={"max_error_px": 0.5})
     ref = ibr.warp(a, b.camera, mesh_options=None)
     np.testing.assert_array_equal(ok.color, ref.color)
+
+
+# ----------------------------------------------------------- second pass: names, ranges, layouts
+def test_camera_refuses_what_a_camera_file_refuses_and_names_the_side():
+    from ibr.base.validate import MAX_FOCAL_PX
+
+    with pytest.raises(ValueError, match=r"^fx: expected at most 1e\+09 pixels, got 1e\+300$"):
+        Camera(1e300, 1.0, 1.0, 1.0, 4, 4)  # a camera file caps fx at MAX_FOCAL_PX; the library did not
+    with pytest.raises(ValueError, match=r"^cy: expected at most 1e\+09 pixels in magnitude"):
+        Camera(10.0, 10.0, 1.0, -1e12, 4, 4)
+    assert Camera(MAX_FOCAL_PX, MAX_FOCAL_PX, 0.0, 0.0, 4, 4).fx == MAX_FOCAL_PX
+    with pytest.raises(ValueError, match=r"^width: expected a positive integer, got 0$"):
+        Camera.from_fov(0, 10, hfov_deg=90)  # was named fx (the focal length computed from width 0)
+    cam = Camera(10.0, 10.0, 1.5, 1.5, 4, 4)
+    with pytest.raises(ValueError, match=r"^height: expected a positive integer, got 0$"):
+        cam.resized(8, 0)
+    assert cam.resized(8, 8).fx == 20.0 and cam.resized(8, 8).cx == 3.5
+
+
+def test_interpolate_far_outside_the_span_names_t():
+    from ibr import interpolate
+    from ibr.base.camera import interpolate_cameras
+    from ibr.io import load_view
+    from samples import DATA_DIR
+
+    a, b = load_view(DATA_DIR / "room_a.json"), load_view(DATA_DIR / "room_b.json")
+    with pytest.raises(ValueError, match=r"^t: 1e\+300 extrapolates to an impossible camera \(fx: "):
+        interpolate(a, b, 1e300)  # was "fx: expected a positive number, got 0.0"
+    far = interpolate_cameras(a.camera, b.camera, 3.0)  # plain extrapolation still works
+    assert far.fx == pytest.approx(a.camera.fx) and far.position == pytest.approx([0.6, 0.0, 0.0])
+
+
+def test_options_are_checked_where_they_are_unused_too():
+    from ibr import build_mesh, interpolate, warp
+    from ibr.io import load_view
+    from ibr.stereo.lens import RadialDistortion, distortion_maps, predistort
+    from ibr.stereo.pair import stereo_pair
+    from samples import DATA_DIR
+
+    a, b = load_view(DATA_DIR / "room_a.json"), load_view(DATA_DIR / "room_b.json")
+    for bad in (0, 1.5, True):  # the edge method does not use min_band; it accepted any value
+        with pytest.raises(ValueError, match=r"^min_band: expected an integer >= 1"):
+            build_mesh(a, min_band=bad)
+    with pytest.raises(ValueError, match=r"^splat: expected one of 'inverse', 'nearest', got 'x'$"):
+        warp(a, b.camera, splat="x")
+    with pytest.raises(ValueError, match=r"^splat: "):
+        interpolate(a, b, 0.5, splat="x")
+    with pytest.raises(TypeError, match=r"^silhouettes: expected True or False, got 'x'$"):
+        interpolate(a, b, 0.5, silhouettes="x")
+    with pytest.raises(TypeError, match=r"^mesh_options: expected a dict"):
+        warp(a, b.camera, method="forward", mesh_options=5)
+    for method in ("mesh", "pixel"):
+        with pytest.raises(TypeError, match=r"^mesh_options: expected a dict"):
+            stereo_pair(a, e=0.06, f=3.0, method=method, mesh_options=5)  # was "argument after ** must be a mapping"
+    lens = RadialDistortion(0.2, 0.0, 1.5)
+    img = _img()
+    with pytest.raises(ValueError, match=r"^method: expected one of 'newton', 'lut', 'approx', got 'x'$"):
+        predistort(img, lens, method="x")  # unused without inverse=True, and accepted
+    with pytest.raises(TypeError, match=r"^inverse: expected True or False, got 'x'$"):
+        predistort(img, lens, inverse="x")
+    with pytest.raises(TypeError, match=r"^width: expected an integer"):
+        distortion_maps("8", 6, lens)
+    with pytest.raises(ValueError, match=r"^width: expected a finite number, got nan$"):
+        distortion_maps(np.nan, 6, lens)  # was "cannot convert float NaN to integer"
+
+
+def test_canvas_sizes_and_pixel_lists_are_named():
+    from ibr.canvas.pick import pick_pixels
+    from ibr.canvas.resample import power_of_two_size, resample, texture_scale
+    from ibr.base.validate import check_positive
+
+    img = _img()
+    with pytest.raises(ValueError, match=r"^resolution\[0\]: expected a finite number, got nan$"):
+        resample(img, (np.nan, 3))
+    with pytest.raises(ValueError, match=r"^resolution: expected \(W, H\)"):
+        resample(img, (3, 3, 3))
+    assert resample(img, (4, 3)).shape == (3, 4, 3)
+    with pytest.raises(ValueError, match=r"^width: expected a finite number, got nan$"):
+        power_of_two_size(np.nan, 5)
+    assert power_of_two_size(728, 480) == 1024 and texture_scale(728, 480, 1024) == pytest.approx((1.4066, 2.1333), abs=1e-4)
+    cam = Camera.from_fov(8, 6, hfov_deg=90)
+    with pytest.raises(ValueError, match=r"^uv: expected \(N, 2\) pixel positions"):
+        pick_pixels(cam, np.zeros((3, 3)), [])  # was numpy's "cannot reshape array of size 9"
+    with pytest.raises(TypeError, match=r"^far: expected a real number, got 'x'$"):
+        check_positive("far", "x", allow_inf=True)  # was "could not convert string to float"
+    assert check_positive("far", np.inf, allow_inf=True) == np.inf
+
+
+@pytest.mark.parametrize("source", ["center", "left", "right"])
+def test_stereo_eyes_keep_a_single_channel_axis_like_the_source(source):
+    """An (H, W, 1) source gave an (H, W, 1) kept eye beside an (H, W) new one (source="left")
+    and (H, W) eyes for "center", where ``ibr.warp`` keeps the axis; now both eyes keep the
+    source's layout, with the same pixels as from the (H, W) source."""
+    from ibr.base.view import View
+    from ibr.io import load_view
+    from ibr.stereo.pair import stereo_pair
+    from samples import DATA_DIR
+
+    a = load_view(DATA_DIR / "room_a.json")
+    flat = View(a.color[..., 0].copy(), a.depth, a.camera, "flat")
+    axis = View(a.color[..., :1].copy(), a.depth, a.camera, "axis")
+    p2 = stereo_pair(flat, e=0.06, f=3.0, source=source)
+    p3 = stereo_pair(axis, e=0.06, f=3.0, source=source)
+    assert p2.left.shape == p2.right.shape == a.color.shape[:2]
+    assert p3.left.shape == p3.right.shape == a.color.shape[:2] + (1,)
+    np.testing.assert_array_equal(p3.left[..., 0], p2.left)
+    np.testing.assert_array_equal(p3.right[..., 0], p2.right)

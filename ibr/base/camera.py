@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from .validate import (check_array, check_camera_dict, check_finite_scalar, check_image_size, check_near_far,
-                       check_positive)
+from .validate import (MAX_FOCAL_PX, MAX_PRINCIPAL_PX, check_array, check_camera_dict, check_finite_scalar,
+                       check_image_size, check_near_far, check_positive)
 
 __all__ = [
     "Camera",
@@ -57,6 +57,15 @@ def _check_pose(name: str, pose) -> np.ndarray:
     return m
 
 
+
+def _check_side(name: str, value) -> int:
+    """An image side in pixels: an integer >= 1 (an integral float is taken), or ValueError naming ``name``."""
+    if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating))
+            or not np.isfinite(value) or int(value) != value or int(value) < 1):
+        raise ValueError(f"{name}: expected a positive integer, got {value!r}")
+    return int(value)
+
+
 @dataclass(frozen=True, eq=False)
 class Camera:
     """Pinhole camera with intrinsics in pixels and a camera-to-world pose.
@@ -84,16 +93,19 @@ class Camera:
 
     def __post_init__(self):
         set_ = object.__setattr__
-        set_(self, "fx", check_positive("fx", self.fx))
-        set_(self, "fy", check_positive("fy", self.fy))
-        set_(self, "cx", check_finite_scalar("cx", self.cx))
-        set_(self, "cy", check_finite_scalar("cy", self.cy))
+        # the ranges of a camera file (check_camera_dict): the library refuses what the CLI refuses
+        for name in ("fx", "fy"):
+            value = check_positive(name, getattr(self, name))
+            if value > MAX_FOCAL_PX:
+                raise ValueError(f"{name}: expected at most {MAX_FOCAL_PX:g} pixels, got {value!r}")
+            set_(self, name, value)
+        for name in ("cx", "cy"):
+            value = check_finite_scalar(name, getattr(self, name))
+            if abs(value) > MAX_PRINCIPAL_PX:
+                raise ValueError(f"{name}: expected at most {MAX_PRINCIPAL_PX:g} pixels in magnitude, got {value!r}")
+            set_(self, name, value)
         for name in ("width", "height"):
-            value = getattr(self, name)
-            if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating))
-                    or not np.isfinite(value) or int(value) != value or int(value) < 1):
-                raise ValueError(f"{name}: expected a positive integer, got {value!r}")
-            set_(self, name, int(value))
+            set_(self, name, _check_side(name, getattr(self, name)))
         check_image_size("camera", self.width, self.height)  # ceilings before any image is allocated (#12)
         set_(self, "world_from_cam", _readonly(_check_pose("world_from_cam", self.world_from_cam)))
 
@@ -115,6 +127,7 @@ class Camera:
         """
         if (hfov_deg is None) == (vfov_deg is None):
             raise ValueError("from_fov: give exactly one of hfov_deg, vfov_deg")
+        width, height = _check_side("width", width), _check_side("height", height)
         if hfov_deg is not None:
             fov = check_finite_scalar("hfov_deg", hfov_deg)
             if not 0 < fov < 180:
@@ -141,6 +154,7 @@ class Camera:
 
     def resized(self, width: int, height: int) -> "Camera":
         """Camera for the same view rendered at another resolution (pixel-center aware)."""
+        width, height = _check_side("width", width), _check_side("height", height)
         sx, sy = width / self.width, height / self.height
         return replace(
             self,
@@ -366,7 +380,11 @@ def interpolate_cameras(a: Camera, b: Camera, t: float) -> Camera:
     pose[:3, :3] = r
     pose[:3, 3] = (1 - t) * a.world_from_cam[:3, 3] + t * b.world_from_cam[:3, 3]
     lerp = lambda p, q: (1 - t) * p + t * q  # noqa: E731
-    return Camera(lerp(a.fx, b.fx), lerp(a.fy, b.fy), lerp(a.cx, b.cx), lerp(a.cy, b.cy), a.width, a.height, pose)
+    try:
+        return Camera(lerp(a.fx, b.fx), lerp(a.fy, b.fy), lerp(a.cx, b.cx), lerp(a.cy, b.cy), a.width, a.height,
+                      pose)
+    except ValueError as exc:  # far outside [0, 1]: a focal length <= 0, a pose that overflowed
+        raise ValueError(f"t: {t!r} extrapolates to an impossible camera ({exc})") from None
 
 
 @dataclass(frozen=True)

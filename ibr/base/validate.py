@@ -122,12 +122,22 @@ def check_finite_scalar(name: str, value) -> float:
 
 def check_positive(name: str, value, *, allow_inf: bool = False) -> float:
     """Return ``value`` as a float > 0 (optionally allowing +inf) or raise naming ``name``."""
-    if allow_inf and value is not None and np.isposinf(float(value)):
+    if allow_inf and isinstance(value, (int, float, np.integer, np.floating)) and np.isposinf(value):
         return float("inf")
     out = check_finite_scalar(name, value)
     if out <= 0:
         raise ValueError(f"{name}: expected a positive number, got {value!r}")
     return out
+
+
+def check_mesh_options(mesh_options) -> dict:
+    """``mesh_options`` (options of ``ibr.build_mesh``) as a new dict (None -> {}), or a
+    TypeError naming it."""
+    if mesh_options is None:
+        return {}
+    if not isinstance(mesh_options, dict):
+        raise TypeError(f"mesh_options: expected a dict of ibr.build_mesh options, got {type(mesh_options).__name__}")
+    return dict(mesh_options)
 
 
 def check_choice(name: str, value, choices: Iterable[str]) -> str:

@@ -158,8 +158,11 @@ def _depth_at(depth, camera: Camera, q: np.ndarray) -> np.ndarray:
 def pick_pixels(camera: Camera, uv, canvases, *, depth=None, depth_tol: float = 1e-3):
     """:func:`pick_rays` for pixels ``uv`` (N, 2) of a pinhole ``camera``; ``depth`` is the scene's
     planar z in that camera (nearest pixel is used). Returns ``(index, xy, distance)``."""
+    q = check_array("uv", uv, dtype_kind="fiu")
+    if q.ndim != 2 or q.shape[1] != 2:
+        raise ValueError(f"uv: expected (N, 2) pixel positions (u, v), got shape {q.shape}")
     o, d, length = camera_rays(camera, uv)
-    q = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+    q = q.astype(np.float64)
     scene = None if depth is None else _depth_at(depth, camera, q) * length
     return pick_rays(canvases, o, d, scene_distance=scene, depth_tol=depth_tol)
 

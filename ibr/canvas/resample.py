@@ -22,7 +22,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..base.validate import check_image
+from ..base.validate import check_image, check_number
 from .plane import Canvas
 
 __all__ = ["canvas_from_image", "image_to_rgba", "power_of_two_size", "resample", "set_image", "texture_scale"]
@@ -30,10 +30,9 @@ __all__ = ["canvas_from_image", "image_to_rgba", "power_of_two_size", "resample"
 
 def power_of_two_size(width: int, height: int) -> int:
     """Smallest ``T = 2^n`` (n >= 1) with ``T >= max(width, height)`` (seed 004's texture size)."""
-    for name, v in (("width", width), ("height", height)):
-        if isinstance(v, bool) or int(v) != v or v < 1:
-            raise ValueError(f"{name}: expected a positive integer, got {v!r}")
-    return max(2, 1 << (int(max(width, height)) - 1).bit_length())
+    width = check_number("width", width, integer=True, minimum=1)
+    height = check_number("height", height, integer=True, minimum=1)
+    return max(2, 1 << (max(width, height) - 1).bit_length())
 
 
 def texture_scale(width: int, height: int, t: int) -> tuple[float, float]:
@@ -41,9 +40,8 @@ def texture_scale(width: int, height: int, t: int) -> tuple[float, float]:
 
     Example: a 728 x 480 frame into a 1024 x 1024 texture: ``(1.4066, 2.1333)``.
     """
-    for name, v in (("width", width), ("height", height), ("t", t)):
-        if isinstance(v, bool) or int(v) != v or v < 1:
-            raise ValueError(f"{name}: expected a positive integer, got {v!r}")
+    width, height, t = (check_number(name, v, integer=True, minimum=1)
+                        for name, v in (("width", width), ("height", height), ("t", t)))
     return t / width, t / height
 
 
@@ -68,9 +66,9 @@ def resample(image, resolution) -> np.ndarray:
     img = check_image("image", image)
     if img.ndim == 3 and img.shape[2] > 4:
         raise ValueError(f"image: at most 4 channels, got shape {img.shape}")
-    w, h = (int(r) for r in resolution)
-    if w < 1 or h < 1:
-        raise ValueError(f"resolution: expected positive (W, H), got {resolution!r}")
+    if np.ndim(resolution) != 1 or len(resolution) != 2:
+        raise ValueError(f"resolution: expected (W, H), got {resolution!r}")
+    w, h = (check_number(f"resolution[{i}]", r, integer=True, minimum=1) for i, r in enumerate(resolution))
     src = img if img.dtype in (np.uint8, np.uint16, np.float32) else img.astype(np.float32)
     out = _resize_axis(np.ascontiguousarray(src), w, h)
     if img.ndim == 3 and out.ndim == 2:

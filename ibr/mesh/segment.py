@@ -555,7 +555,8 @@ def segment(
         bf = check_positive("break_fraction", break_fraction)
         rects = split_rects(q, method=method, threshold=thr / scale,
                             tolerance=thr / scale + QUANT_FIT_CODES * dq,
-                            break_threshold=max(bf * thr / scale, QUANT_BREAK_CODES * dq))
+                            break_threshold=max(bf * thr / scale, QUANT_BREAK_CODES * dq),
+                            min_band=min_band)  # unused by the edge method, but checked as for the others
     else:
         rects = split_rects(q, method=method, threshold=max(thr / scale, QUANT_BREAK_CODES * dq), min_band=min_band)
     seconds = time.perf_counter() - t0

@@ -21,7 +21,7 @@ from typing import Iterator, Sequence
 
 import numpy as np
 
-from ..base.validate import check_choice, check_finite_scalar, check_positive
+from ..base.validate import check_choice, check_finite_scalar, check_mesh_options, check_positive
 from ..base.camera import Camera, interpolate_cameras
 from ..base.depth import quantization_of
 from .composite import (COMPOSITE_MODES, composite, mixed_pixels, pack_trust, remap_composite, rgbt_source,
@@ -337,15 +337,6 @@ def _nothing_seen(camera: Camera, names, t) -> ValueError:
     )
 
 
-def _check_mesh_options(mesh_options) -> dict:
-    """``mesh_options`` as a new dict (None -> {}), or a TypeError naming it."""
-    if mesh_options is None:
-        return {}
-    if not isinstance(mesh_options, dict):
-        raise TypeError(f"mesh_options: expected a dict of ibr.build_mesh options, got {type(mesh_options).__name__}")
-    return dict(mesh_options)
-
-
 # ------------------------------------------------------------------------- public calls
 def warp(
     view: View,
@@ -404,9 +395,13 @@ def warp(
     check_choice("footprint", footprint, FOOTPRINTS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)
     check_choice("lod", lod, LODS)
+    from .forward import SPLATS
+
+    check_choice("splat", splat, SPLATS)  # checked for the mesh method too, where it is unused
     _check_source(view, "view")
     camera = _check_target(camera)
-    opts = _lod_options(view, [camera], _check_mesh_options(mesh_options), lod) if method == "mesh" else {}
+    mesh_options = check_mesh_options(mesh_options)
+    opts = _lod_options(view, [camera], mesh_options, lod) if method == "mesh" else {}
     comp = _render([view], camera, [1.0], method=method, footprint=footprint, splat=splat,
                    mesh_options=[opts], interpolation=interpolation, composite_mode="blend",
                    depth_tol=0.02, dtype=view.color.dtype)
@@ -458,6 +453,11 @@ def iter_interpolate(
     check_choice("footprint", footprint, FOOTPRINTS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)
     check_choice("lod", lod, LODS)
+    from .forward import SPLATS
+
+    check_choice("splat", splat, SPLATS)
+    if not isinstance(silhouettes, (bool, np.bool_)):
+        raise TypeError(f"silhouettes: expected True or False, got {silhouettes!r}")
     depth_tol = check_positive("depth_tol", depth_tol)
     _check_source(view_a, "view_a")
     _check_source(view_b, "view_b")
@@ -472,7 +472,7 @@ def iter_interpolate(
             f"{view_a.color.dtype} {view_a.color.shape}; convert both to one dtype and layout"
         )
     cams, ts, _ = _targets(view_a, view_b, t)
-    base = _check_mesh_options(mesh_options)
+    base = check_mesh_options(mesh_options)
     # level of detail from the span of the whole call (one mesh per source for every frame)
     opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
     previous = None

@@ -39,7 +39,8 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from ..base.validate import COLOR_DTYPES, check_array, check_choice, check_finite_scalar, check_image, check_positive
+from ..base.validate import (COLOR_DTYPES, check_array, check_choice, check_finite_scalar, check_image, check_number,
+                             check_positive)
 
 __all__ = [
     "RadialDistortion",
@@ -219,6 +220,11 @@ def distortion_maps(width: int, height: int, lens: RadialDistortion, *, center_p
     """Cached, read-only sampling maps; see :func:`_distortion_maps` (same arguments)."""
     if not isinstance(lens, RadialDistortion):
         raise TypeError(f"lens: expected a RadialDistortion, got {type(lens).__name__}")
+    width = check_number("width", width, integer=True, minimum=1)
+    height = check_number("height", height, integer=True, minimum=1)
+    if not isinstance(inverse, (bool, np.bool_)):  # checked always, not only where it is used
+        raise TypeError(f"inverse: expected True or False, got {inverse!r}")
+    check_choice("method", method, INVERSE_METHODS)
     center = None if center_px is None else _check_center(center_px, int(width), int(height))
     scale = None if scale_px is None else check_positive("scale_px", scale_px)
     return _cached_maps(int(width), int(height), lens, center, scale, bool(inverse), method)

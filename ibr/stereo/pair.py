@@ -36,7 +36,8 @@ import numpy as np
 from . import _pair_kernels as _k
 from ..render import _fill_kernels as _fill_k
 from ..render.bands import run_bands
-from ..base.validate import COLOR_DTYPES, check_array, check_choice, check_finite_scalar, check_image, check_positive
+from ..base.validate import (COLOR_DTYPES, check_array, check_choice, check_finite_scalar, check_image,
+                             check_mesh_options, check_positive)
 from ..base.camera import Camera, camera_from_gl_projection
 from ..base.view import View
 
@@ -180,10 +181,11 @@ def _float_color(view: View) -> np.ndarray:
     return np.ascontiguousarray((col[..., None] if col.ndim == 2 else col).astype(np.float32, copy=False))
 
 
-def _to_dtype(img: np.ndarray, dtype) -> np.ndarray:
-    """``img`` (a fresh float32 array: rounded and clipped in place; or already ``dtype``) in
-    ``dtype``."""
-    if img.shape[2] == 1:
+def _to_dtype(img: np.ndarray, dtype, ndim: int) -> np.ndarray:
+    """``img`` (H, W, C) (a fresh float32 array: rounded and clipped in place; or already
+    ``dtype``) in ``dtype``, one channel squeezed to (H, W) when the source was ``ndim`` 2 (an
+    (H, W, 1) source keeps its axis, as the kept eye and ``ibr.warp`` do)."""
+    if img.shape[2] == 1 and ndim == 2:
         img = img[..., 0]
     if img.dtype == np.dtype(dtype):
         return img
@@ -249,12 +251,13 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
     if not np.isfinite(view.depth).any():  # same check and message as `ibr stereo` (#12)
         raise ValueError(no_valid_depth_message(view))
     check_choice("method", method, METHODS)
+    mesh_options = check_mesh_options(mesh_options)
     left_cam, right_cam = stereo_cameras(view.camera, e=e, f=f, source=source)
     mesh = None
     if method == "mesh":
         from ..mesh.quad_mesh import build_mesh
 
-        mesh = build_mesh(view, **(mesh_options or {}))  # one mesh serves both eyes
+        mesh = build_mesh(view, **mesh_options)  # one mesh serves both eyes
     out = {}
     color32 = _raw_color(view) if method == "pixel" else None  # (both eyes share one conversion)
     for eye, cam in (("left", left_cam), ("right", right_cam)):
@@ -269,7 +272,7 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
         d = np.ascontiguousarray(d, dtype=np.float32)
         holes = np.zeros(cov.shape, np.bool_)
         run_bands(_fill_k.fill_rows_background, c.shape[0], c, d, np.ascontiguousarray(cov), holes)  # in place
-        out[eye] = (_to_dtype(c, np.asarray(view.color).dtype), d, holes)
+        out[eye] = (_to_dtype(c, np.asarray(view.color).dtype, np.ndim(view.color)), d, holes)
     return StereoPair(out["left"][0], out["right"][0], out["left"][2], out["right"][2],
                       out["left"][1], out["right"][1], left_cam, right_cam)
 
