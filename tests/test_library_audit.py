@@ -254,3 +254,18 @@ def test_stereo_eyes_keep_a_single_channel_axis_like_the_source(source):
     assert p3.left.shape == p3.right.shape == a.color.shape[:2] + (1,)
     np.testing.assert_array_equal(p3.left[..., 0], p2.left)
     np.testing.assert_array_equal(p3.right[..., 0], p2.right)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_canvas_float_image_outside_0_1_is_refused_whatever_its_float_type(dtype):
+    """A float image in 0..254 (a uint8 image converted without scaling) was kept as is in a
+    float32 canvas from float32 input but clipped to white from float64 input; both are refused
+    now, and the same image scaled to [0, 1] gives the same canvas from either float type."""
+    from ibr.canvas.resample import canvas_from_image
+
+    img = _img(8, 8)
+    with pytest.raises(ValueError, match=r"^image: float pixels must lie in \[0, 1\] \(1\.0 = white\), got values in"):
+        canvas_from_image(img.astype(dtype), [0, 0, 3], [0, 0, -1], [1, 1])
+    a = canvas_from_image((img / 255.0).astype(np.float32), [0, 0, 3], [0, 0, -1], [1, 1])
+    b = canvas_from_image((img / 255.0).astype(dtype), [0, 0, 3], [0, 0, -1], [1, 1])
+    np.testing.assert_allclose(a.rgba, b.rgba, atol=1e-6)

@@ -90,6 +90,10 @@ def image_to_rgba(image, dtype=np.uint8) -> np.ndarray:
     if img.dtype.kind == "f":
         if not np.all(np.isfinite(img)):
             raise ValueError("image: float image contains NaN or inf")
+        lo, hi = float(img.min()), float(img.max())
+        if lo < -1e-6 or hi > 1 + 1e-6:  # float64 was clipped on conversion, float32 kept as is: neither (#12)
+            raise ValueError(f"image: float pixels must lie in [0, 1] (1.0 = white), got values in [{lo:g}, {hi:g}]; "
+                             "scale the image (e.g. / 255) or pass uint8/uint16")
     elif img.dtype not in (np.uint8, np.uint16):
         raise ValueError(f"image: expected uint8, uint16 or float pixels, got {img.dtype}")
     if img.ndim == 2:
