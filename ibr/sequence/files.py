@@ -24,11 +24,13 @@ checksums of batch inputs).
 from __future__ import annotations
 
 import json
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Iterator
 
+from ..base.validate import check_keys
 from ..base.view import View
 from ..io.images import atomic_path
 from ..io.view_files import VIEW_FORMAT, load_view, save_view
@@ -46,6 +48,10 @@ __all__ = [
 
 SEQUENCE_FORMAT = "ibr-sequence"
 SEQUENCE_VERSION = 1
+
+#: Keys of a manifest and of its ``ground_truth`` object (any other key is refused, never ignored).
+MANIFEST_KEYS = ("format", "version", "name", "fps", "views", "ground_truth")
+GROUND_TRUTH_KEYS = ("sequence", "factor")
 
 _NUMBERED = re.compile(r"^(?P<prefix>.+)_(?P<number>\d+)\.json$")
 
@@ -144,6 +150,7 @@ def load_sequence(path) -> Sequence:
         raise ValueError(f"{where}: expected a JSON object with 'format': {SEQUENCE_FORMAT!r}, got {got!r}")
     if doc.get("version") != SEQUENCE_VERSION:
         raise ValueError(f"{where}: unsupported 'version' {doc.get('version')!r} (this reader knows {SEQUENCE_VERSION})")
+    check_keys(where, doc, MANIFEST_KEYS)  # a misspelt 'fps' or 'ground_truth' is refused, never ignored
     names = doc.get("views")
     if not isinstance(names, list) or not names or not all(isinstance(n, str) and n for n in names):
         raise ValueError(f"{where}: 'views' must be a non-empty list of view file names, got {names!r}")
@@ -152,13 +159,14 @@ def load_sequence(path) -> Sequence:
         if not v.is_file():
             raise FileNotFoundError(f"{where}: 'views[{i}]' refers to a missing file {v}")
     fps = doc.get("fps")
-    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float)) or not fps > 0):
-        raise ValueError(f"{where}: 'fps' must be a positive number, got {fps!r}")
+    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float)) or not 0 < fps < math.inf):
+        raise ValueError(f"{where}: 'fps' must be a positive finite number, got {fps!r}")
     truth = factor = None
     gt = doc.get("ground_truth")
     if gt is not None:
         if not isinstance(gt, dict) or not isinstance(gt.get("sequence"), str):
             raise ValueError(f"{where}: 'ground_truth' must be an object with a 'sequence' file name, got {gt!r}")
+        check_keys(f"{where}: 'ground_truth'", gt, GROUND_TRUTH_KEYS)
         factor = gt.get("factor")
         if isinstance(factor, bool) or not isinstance(factor, int) or factor < 1:
             raise ValueError(f"{where}: 'ground_truth.factor' must be an integer >= 1, got {factor!r}")

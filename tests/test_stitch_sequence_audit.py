@@ -1,0 +1,67 @@
+"""Audit of panorama.stitch and ibr.sequence on hard and bad inputs (regressions of the fixes).
+
+Tiny views built in place (no synthetic renders) so the file runs in seconds.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from ibr import Camera, View
+from ibr.sequence import load_sequence, save_sequence
+
+
+def _view(seed=0, w=16, h=12, z=2.0, x=0.0):
+    pose = np.eye(4)
+    pose[0, 3] = x
+    cam = Camera.from_fov(w, h, hfov_deg=60, world_from_cam=pose)
+    rng = np.random.default_rng(seed)
+    return View(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), np.full((h, w), z, np.float32), cam, f"v{seed}")
+
+
+@pytest.fixture()
+def manifest(tmp_path):
+    return save_sequence([_view(0), _view(1, x=0.01)], tmp_path / "walk.json", fps=10,
+                         ground_truth={"sequence": "walk.json", "factor": 1})
+
+
+def _rewrite(path, **changes):
+    doc = json.loads(path.read_text())
+    for k, v in changes.items():
+        if v is None:
+            doc.pop(k)
+        else:
+            doc[k] = v
+    path.write_text(json.dumps(doc))
+    return path
+
+
+# --------------------------------------------------------------------------- sequence manifests
+def test_manifest_misspelt_keys_are_refused_with_the_nearest_name(manifest):
+    doc = json.loads(manifest.read_text())
+    _rewrite(manifest, fps=None, fsp=10)                           # was silently ignored: fps None
+    with pytest.raises(ValueError, match=r"unknown key 'fsp' \(did you mean 'fps'\?\)"):
+        load_sequence(manifest)
+    manifest.write_text(json.dumps(doc))
+    _rewrite(manifest, ground_truth=None, groundtruth=doc["ground_truth"])   # was ignored: no scoring
+    with pytest.raises(ValueError, match=r"unknown key 'groundtruth' \(did you mean 'ground_truth'\?\)"):
+        load_sequence(manifest)
+    manifest.write_text(json.dumps(doc))
+    _rewrite(manifest, ground_truth={"sequence": "walk.json", "factr": 1})
+    with pytest.raises(ValueError, match=r"'ground_truth': unknown key 'factr' \(did you mean 'factor'\?\)"):
+        load_sequence(manifest)
+    manifest.write_text(json.dumps(doc))
+    _rewrite(manifest, views=None, view=doc["views"])
+    with pytest.raises(ValueError, match=r"unknown key 'view' \(did you mean 'views'\?\)"):
+        load_sequence(manifest)
+    manifest.write_text(json.dumps(doc))
+    assert load_sequence(manifest).fps == 10                       # the written manifest still loads
+
+
+def test_manifest_infinite_fps_is_refused(manifest):
+    manifest.write_text(manifest.read_text().replace('"fps": 10.0', '"fps": Infinity'))
+    with pytest.raises(ValueError, match="'fps' must be a positive finite number, got inf"):
+        load_sequence(manifest)
