@@ -186,9 +186,9 @@ def run_interpolate(args) -> int:
         report = plan.add_file("--report", args.report, JSON_EXTS)
         plan.check()
 
-        fps = args.fps
-        if seq.fps and fps == 24.0:  # the parser's default: follow the sequence
-            fps = seq.fps * factor
+        fps = args.fps  # None: not given (an explicit --fps 24 is kept)
+        if fps is None:
+            fps = seq.fps * factor if seq.fps else 24.0
         stream = VideoStream(plan.stage(video), fps) if video else None
         truth_views = iter_views(truth) if truth is not None else None
         info(f"interpolate: {seq.name}: {len(seq)} views -> {n_out} frames (factor {factor}"

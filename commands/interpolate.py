@@ -38,7 +38,8 @@ def add_arguments(parser) -> None:
                         help="frame format: png (the sources' 8/16-bit) or exr (float32)")
     parser.add_argument("--video", metavar="OUT.mp4",
                         help="also write the frames as a video (OpenCV writer; .mp4, .m4v, .mov, .avi)")
-    parser.add_argument("--fps", type=frame_rate, default=24.0, help="video frame rate (default %(default)s)")
+    parser.add_argument("--fps", type=frame_rate, default=None,
+                        help="video frame rate (default 24; for a sequence: the manifest's fps x --factor, else 24)")
     parser.add_argument("--contact-sheet", metavar="SHEET.png",
                         help="also write a contact sheet of all frames (.png, .jpg, .tif)")
     parser.add_argument("--holes", action="store_true",
@@ -225,8 +226,9 @@ def run(args) -> int:
     for t in ts:
         if not np.isfinite(t):
             raise ValueError(f"--t: expected finite numbers, got {t}")
-    if not (isinstance(args.fps, (int, float)) and np.isfinite(args.fps) and args.fps > 0):
-        raise ValueError(f"--fps: expected a positive frame rate, got {args.fps}")
+    fps = 24.0 if args.fps is None else args.fps
+    if not (isinstance(fps, (int, float)) and np.isfinite(fps) and fps > 0):
+        raise ValueError(f"--fps: expected a positive frame rate, got {fps}")
 
     with OutputPlan("ibr interpolate", log=info) as plan:
         plan.add_view_input("A", path_a)
@@ -280,7 +282,7 @@ def run(args) -> int:
             t_prev = time.perf_counter()
 
         if video:
-            write_video(plan.stage(video), colors, args.fps)
+            write_video(plan.stage(video), colors, fps)
         if sheet:
             write_image(plan.stage(sheet), contact_sheet(colors, labels))
         plan.commit()  # frames, video and sheet appear together, or not at all

@@ -65,3 +65,21 @@ def test_manifest_infinite_fps_is_refused(manifest):
     manifest.write_text(manifest.read_text().replace('"fps": 10.0', '"fps": Infinity'))
     with pytest.raises(ValueError, match="'fps' must be a positive finite number, got inf"):
         load_sequence(manifest)
+
+
+# --------------------------------------------------------------------------- ibr interpolate SEQ
+def _cli(*argv):
+    import cli
+
+    return cli.main([str(a) for a in argv])
+
+
+@pytest.mark.parametrize("given, expected", [(["--fps", "24"], 24.0), ([], 20.0), (["--fps", "12.5"], 12.5)])
+def test_interpolate_sequence_keeps_an_explicit_fps_of_24(manifest, tmp_path, given, expected):
+    """An explicit --fps 24 was taken for the parser's default and replaced by fps x factor (20)."""
+    import cv2
+
+    _rewrite(manifest, ground_truth=None)
+    video = tmp_path / "v.avi"
+    assert _cli("interpolate", manifest, "--factor", 2, "--out", tmp_path / "f", "--video", video, *given) == 0
+    assert cv2.VideoCapture(str(video)).get(cv2.CAP_PROP_FPS) == pytest.approx(expected)
