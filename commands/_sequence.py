@@ -236,8 +236,9 @@ def run_interpolate(args) -> int:
         fl_holes = summarize_flicker(hole_changes, hole_shares)
         inner = [row for row in rows if not row["key"]]
         med = np.median([row["ms"] for row in inner]) if inner else float("nan")
-        info(f"interpolate: {len(inner)} new frames, median {med:.1f} ms per frame; holes "
-             f"{np.mean([row['holes'] for row in inner]):.3%} of pixels before filling")
+        if inner:  # --factor 1: keys only (no mean of an empty list: a RuntimeWarning and "nan%")
+            info(f"interpolate: {len(inner)} new frames, median {med:.1f} ms per frame; holes "
+                 f"{np.mean([row['holes'] for row in inner]):.3%} of pixels before filling")
         basis = "ground truth unchanged" if truth is not None else "static by depth and camera motion (< 0.5 px)"
         floor = summarize_flicker(truth_changes, shares).mean if truth_changes else None
         info(f"interpolate: flicker {fl.mean * 255:.4f} 8-bit levels (mean |change| between consecutive frames "
@@ -259,12 +260,26 @@ def run_interpolate(args) -> int:
                  + (f", extrapolated tail {np.mean([x for x in scored if x not in interior]):.2f} dB)"
                     if len(interior) < len(scored) else ")"))
         if report:
-            Path(plan.stage(report)).write_text(json.dumps({"summary": summary, "frames": rows}, indent=1) + "\n",
-                                                encoding="utf-8")
+            doc = _json_safe({"summary": summary, "frames": rows})  # NaN/inf (nothing to measure) -> null
+            Path(plan.stage(report)).write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n", encoding="utf-8")
         plan.commit()
     info(f"interpolate: wrote {len(rows)} frames to {out}/" + (f", video {video} at {fps:g} fps" if video else "")
          + (f", report {report}" if report else ""))
     return 0
+
+
+def _json_safe(value):
+    """``value`` with every non-finite float (NaN: no static hole pixel, no new frame; inf: a
+    perfect PSNR) as None, so that the report is strict JSON (``NaN`` is not JSON)."""
+    import math
+
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
 
 
 def _unit_float(color):

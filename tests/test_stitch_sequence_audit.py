@@ -83,3 +83,20 @@ def test_interpolate_sequence_keeps_an_explicit_fps_of_24(manifest, tmp_path, gi
     video = tmp_path / "v.avi"
     assert _cli("interpolate", manifest, "--factor", 2, "--out", tmp_path / "f", "--video", video, *given) == 0
     assert cv2.VideoCapture(str(video)).get(cv2.CAP_PROP_FPS) == pytest.approx(expected)
+
+
+def test_interpolate_report_is_strict_json_with_factor_1(manifest, tmp_path, capsys):
+    """--factor 1 (keys only) wrote "median_ms": NaN and "flicker_holes_8bit": NaN (not JSON) and
+    printed numpy's "Mean of empty slice" warning; the values are null now."""
+    import warnings
+
+    report = tmp_path / "r.json"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _cli("interpolate", manifest, "--factor", 1, "--out", tmp_path / "f", "--report", report) == 0
+    text = report.read_text()
+    doc = json.loads(text, parse_constant=lambda c: pytest.fail(f"report holds {c}"))
+    s = doc["summary"]
+    assert s["frames"] == 2 and s["median_ms"] is None and s["flicker_holes_8bit"] is None
+    assert [row["key"] for row in doc["frames"]] == [True, True]
+    assert "nan%" not in capsys.readouterr().err
