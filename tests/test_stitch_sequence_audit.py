@@ -100,3 +100,53 @@ def test_interpolate_report_is_strict_json_with_factor_1(manifest, tmp_path, cap
     assert s["frames"] == 2 and s["median_ms"] is None and s["flicker_holes_8bit"] is None
     assert [row["key"] for row in doc["frames"]] == [True, True]
     assert "nan%" not in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- flicker and PSNR
+def test_scores_refuse_colours_without_a_white_level():
+    from ibr.sequence import psnr
+    from ibr.sequence.metrics import frame_change
+
+    black, white = np.zeros((4, 4), np.int64), np.full((4, 4), 255, np.int64)
+    with pytest.raises(TypeError, match="color: expected a colour dtype uint8, uint16, float16, float32, float64, "
+                                        "got int64"):
+        psnr(black, white)                                         # was -48.13 dB
+    with pytest.raises(TypeError, match="current: expected a colour dtype .* got int64"):
+        frame_change(np.zeros((4, 4), np.uint8), white, np.ones((4, 4), bool))   # was 255 "[0, 1] units"
+    assert psnr(black.astype(np.uint8), white.astype(np.uint8)) == 0.0
+    assert psnr(np.full((4, 4), 255, np.uint8), np.full((4, 4), 65535, np.uint16)) == float("inf")
+
+
+def test_flicker_masks_and_tolerances_are_checked():
+    from ibr.sequence import flicker
+    from ibr.sequence.metrics import frame_change, static_mask_from_motion, static_mask_from_truth
+
+    a, b = np.zeros((4, 4), np.float32), np.full((4, 4), 0.5, np.float32)
+    with pytest.raises(TypeError, match="static: expected a boolean mask, got dtype float64"):
+        frame_change(a, b, np.full((4, 4), 0.2))                   # 0.2 counted as static
+    assert frame_change(a, b, np.ones((4, 4), bool)) == 0.5
+    with pytest.raises(ValueError, match=r"current: shape \(4, 4, 3\) differs from previous \(4, 4, 1\)"):
+        static_mask_from_truth(a, np.zeros((4, 4, 3), np.float32))   # broadcast into a wrong mask
+    for tol in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match="tol: expected"):
+            static_mask_from_truth(a, a, tol=tol)                  # marked nothing static, silently
+    assert static_mask_from_truth(a, a).all()
+    cam = Camera.from_fov(4, 4, hfov_deg=60)
+    for max_px in (-1.0, float("nan"), 0):
+        with pytest.raises(ValueError, match="max_px: expected a"):
+            static_mask_from_motion(np.ones((4, 4)), cam, cam, max_px=max_px)
+    with pytest.raises(TypeError, match="previous_camera: expected an ibr Camera, got NoneType"):
+        static_mask_from_motion(np.ones((4, 4)), cam, None)
+    assert static_mask_from_motion(np.ones((4, 4)), cam, cam).all()
+    with pytest.raises(ValueError, match="frames: expected at least one frame, got none"):
+        flicker([], [])                                            # was "expected -1 masks"
+
+
+def test_frame_count_refuses_a_non_integer_number_of_keys():
+    from ibr.sequence import frame_count
+
+    with pytest.raises(TypeError, match="keys: expected an integer number of key frames, got 2.5"):
+        frame_count(2.5, 2)                                        # was 5.0 frames
+    with pytest.raises(TypeError, match="keys: expected an integer"):
+        frame_count("3", 2)
+    assert frame_count(np.int64(3), 2) == 6 and frame_count(2, 1, tail=False) == 2

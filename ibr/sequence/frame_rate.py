@@ -80,6 +80,8 @@ def _check_factor(factor) -> int:
 def frame_count(keys: int, factor: int, *, tail: bool = True) -> int:
     """Number of output frames for ``keys`` key frames: N F with the tail, (N - 1) F + 1 without."""
     factor = _check_factor(factor)
+    if isinstance(keys, bool) or not isinstance(keys, (int, np.integer)):
+        raise TypeError(f"keys: expected an integer number of key frames, got {keys!r}")
     if keys < 2:
         raise ValueError(f"keys: a sequence to up-convert needs at least 2 views, got {keys}")
     return keys * factor if tail else (keys - 1) * factor + 1

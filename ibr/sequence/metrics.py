@@ -24,6 +24,7 @@ from typing import Sequence
 import numpy as np
 
 from ..base.camera import Camera
+from ..base.validate import check_finite_scalar, check_image, check_positive
 
 __all__ = [
     "FlickerReport",
@@ -39,9 +40,18 @@ __all__ = [
 ]
 
 
-def as_unit_float(color) -> np.ndarray:
-    """Color as float32 in [0, 1] (uint8 / 255, uint16 / 65535, floats as they are), (H, W, C)."""
-    c = np.asarray(color)
+#: Colour dtypes the scores accept (any other integer type has no known white level).
+UNIT_DTYPES = ("uint8", "uint16", "float16", "float32", "float64")
+
+
+def as_unit_float(color, name: str = "color") -> np.ndarray:
+    """Color as float32 in [0, 1] (uint8 / 255, uint16 / 65535, floats as they are), (H, W, C).
+
+    Other dtypes (int32, int64, bool ...) are refused naming ``name``: their raw codes are not
+    [0, 1] colours (an int64 0..255 image scored -48 dB against itself plus 255)."""
+    c = check_image(name, np.asarray(color))
+    if c.dtype.name not in UNIT_DTYPES:
+        raise TypeError(f"{name}: expected a colour dtype {', '.join(UNIT_DTYPES)}, got {c.dtype}")
     if c.dtype == np.uint8:
         c = c.astype(np.float32) / 255
     elif c.dtype == np.uint16:
@@ -53,7 +63,7 @@ def as_unit_float(color) -> np.ndarray:
 
 def psnr(color, truth) -> float:
     """PSNR in dB of ``color`` against ``truth`` over all pixels (peak 1 after :func:`as_unit_float`)."""
-    a, b = as_unit_float(color), as_unit_float(truth)
+    a, b = as_unit_float(color, "color"), as_unit_float(truth, "truth")
     if a.shape != b.shape:
         raise ValueError(f"color: shape {a.shape} differs from the truth's {b.shape}")
     mse = float(np.mean((a.astype(np.float64) - b) ** 2))
@@ -83,8 +93,10 @@ class FlickerReport:
 def frame_change(previous, current, static) -> float:
     """``F_k``: mean absolute change from ``previous`` to ``current`` over the ``static`` pixels
     ([0, 1] color units, mean over channels); NaN when no pixel is static."""
-    a, b = as_unit_float(previous), as_unit_float(current)
-    m = np.asarray(static, bool)
+    a, b = as_unit_float(previous, "previous"), as_unit_float(current, "current")
+    m = np.asarray(static)
+    if m.dtype != np.bool_:  # 0.2 or 2 would silently count as static
+        raise TypeError(f"static: expected a boolean mask, got dtype {m.dtype}")
     if a.shape != b.shape:
         raise ValueError(f"current: shape {b.shape} differs from previous {a.shape}")
     if m.shape != b.shape[:2]:
@@ -112,6 +124,8 @@ def flicker(frames: Sequence, static: Sequence) -> FlickerReport:
     """
     frames = list(frames)
     static = list(static)
+    if not frames:
+        raise ValueError("frames: expected at least one frame, got none")
     if len(static) != len(frames) - 1:
         raise ValueError(f"static: expected {len(frames) - 1} masks (one per consecutive pair), got {len(static)}")
     vals = [frame_change(frames[k - 1], frames[k], static[k - 1]) for k in range(1, len(frames))]
@@ -121,7 +135,12 @@ def flicker(frames: Sequence, static: Sequence) -> FlickerReport:
 def static_mask_from_truth(previous, current, *, tol: float = 1.0 / 255) -> np.ndarray:
     """Pixels whose every ground-truth channel changes by at most ``tol`` ([0, 1] units) between
     two consecutive exact frames."""
-    a, b = as_unit_float(previous), as_unit_float(current)
+    tol = check_finite_scalar("tol", tol)
+    if tol < 0:
+        raise ValueError(f"tol: expected a tolerance >= 0 ([0, 1] colour units), got {tol!r}")
+    a, b = as_unit_float(previous, "previous"), as_unit_float(current, "current")
+    if a.shape != b.shape:  # (H, W, 3) against (H, W, 1) broadcast silently
+        raise ValueError(f"current: shape {b.shape} differs from previous {a.shape}")
     return np.all(np.abs(b - a) <= tol + 1e-7, axis=-1)
 
 
@@ -135,6 +154,10 @@ def static_mask_from_motion(depth, camera: Camera, previous_camera: Camera, *, m
     """Pixels of a frame (``depth`` in ``camera``) whose surface point projects into
     ``previous_camera`` less than ``max_px`` pixels from the same pixel (static scene assumed;
     pixels without depth are not static)."""
+    max_px = check_positive("max_px", max_px)  # NaN or <= 0 marked nothing static, silently
+    for name, cam in (("camera", camera), ("previous_camera", previous_camera)):
+        if not isinstance(cam, Camera):
+            raise TypeError(f"{name}: expected an ibr Camera, got {type(cam).__name__}")
     z = np.asarray(depth, np.float64)
     if z.shape != camera.shape:
         raise ValueError(f"depth: expected shape {camera.shape}, got {z.shape}")
