@@ -150,3 +150,37 @@ def test_frame_count_refuses_a_non_integer_number_of_keys():
     with pytest.raises(TypeError, match="keys: expected an integer"):
         frame_count("3", 2)
     assert frame_count(np.int64(3), 2) == 6 and frame_count(2, 1, tail=False) == 2
+
+
+# --------------------------------------------------------------------------- panorama.stitch
+def test_stitch_names_bad_views_center_and_mesh_options():
+    from panorama.stitch import equirect_camera, ods_cameras, stitch_rgbd
+
+    v = _view(0)
+    with pytest.raises(TypeError, match="views: expected a sequence of ibr Views, got NoneType"):
+        stitch_rgbd(None, 16)                                     # was "'NoneType' object is not iterable"
+    with pytest.raises(ValueError, match=r"center: expected a finite 3-vector, got shape \(2,\)"):
+        equirect_camera(16, center=(0, 0))                        # was "cannot reshape array of size 2"
+    with pytest.raises(TypeError, match="center: expected a finite 3-vector, got 'abc'"):
+        ods_cameras(16, center="abc")
+    with pytest.raises(TypeError, match="mesh_options: expected a dict"):
+        stitch_rgbd([v], 16, mesh_options=3)                      # was "'int' object is not iterable"
+    with pytest.raises(TypeError, match=r"mesh_options: unknown option 'max_eror_px' \(did you mean 'max_error_px'\?\)"):
+        stitch_rgbd([v], 16, mesh_options={"max_eror_px": 1.0})
+    a = stitch_rgbd([v], 16, mesh_options={"max_error_px": 0.5})
+    b = stitch_rgbd([v], 16, mesh_options={"max_error_px": 0.5})
+    assert np.array_equal(a.color, b.color) and not a.holes.all()
+
+
+def test_pack_ods_cube_face_size_zero_is_refused():
+    from panorama.stitch import OdsPair, Stitched, pack_ods
+
+    eye = Stitched(np.zeros((8, 16, 3), np.uint8), np.ones((8, 16), np.float32), np.zeros((8, 16), bool),
+                   np.zeros((8, 16), np.int16), None)
+    pair = OdsPair(eye, eye)
+    for bad in (0, -4, 2.5, True):
+        with pytest.raises(ValueError, match="face_size: expected a positive integer"):
+            pack_ods(pair, "cube", face_size=bad)                 # 0 silently became W / 4
+    left, right = pack_ods(pair, "cube", face_size=3)
+    assert left["+x"].shape == (3, 3, 3)
+    assert pack_ods(pair, "cube")[0]["+x"].shape == (4, 4, 3)

@@ -170,7 +170,12 @@ def pack_ods(pair: OdsPair, layout: str = "top-bottom", *, face_size: int | None
         return np.concatenate([left, right], axis=1)
     if layout == "anaglyph":
         return anaglyph(left, right)
-    s = face_size or left.shape[1] // 4
+    if face_size is None:
+        s = left.shape[1] // 4
+    elif isinstance(face_size, bool) or not isinstance(face_size, (int, np.integer)) or face_size < 1:
+        raise ValueError(f"face_size: expected a positive integer, got {face_size!r}")  # 0 meant "default"
+    else:
+        s = int(face_size)
     return equirect_to_cubemap(left, s, layout="dict"), equirect_to_cubemap(right, s, layout="dict")
 
 

@@ -15,6 +15,7 @@ from typing import Sequence
 import numpy as np
 
 from ibr.base.camera import Camera
+from ibr.base.validate import check_mesh_options
 from ibr.base.ray_camera import SphericalCamera
 from ibr.base.view import View
 from ibr.render.blend import blend_sources
@@ -50,6 +51,8 @@ def check_views(views) -> list[View]:
     """The views as a list, each with depth; a clear error otherwise."""
     if isinstance(views, View):
         views = [views]
+    if views is None or isinstance(views, (str, bytes)) or not hasattr(views, "__iter__"):
+        raise TypeError(f"views: expected a sequence of ibr Views, got {type(views).__name__}")
     views = list(views)
     if not views:
         raise ValueError("views: expected at least one RGB-D view, got none")
@@ -121,7 +124,25 @@ def stitch_rgbd(views, camera, *, mesh_options: dict | None = None, progress=Non
         camera = equirect_camera(int(camera), center=np.mean([v.camera.position for v in views], axis=0))
     if not isinstance(camera, (SphericalCamera, Camera)):
         raise TypeError(f"camera: expected a SphericalCamera, a Camera or an int width, got {type(camera).__name__}")
-    return _render(views, camera, dict(mesh_options or {}), blend_options, progress)
+    return _render(views, camera, _mesh_options(mesh_options), blend_options, progress)
+
+
+def _mesh_options(mesh_options) -> dict:
+    """``mesh_options`` checked: a dict of :func:`ibr.build_mesh` keywords (a typo is named with the
+    nearest valid one instead of build_mesh's "unexpected keyword argument")."""
+    import inspect
+
+    from ibr.base.validate import nearest_name
+    from ibr.mesh import build_mesh
+
+    opts = check_mesh_options(mesh_options)
+    valid = [n for n, p in inspect.signature(build_mesh).parameters.items() if p.kind == p.KEYWORD_ONLY]
+    for key in opts:
+        if key not in valid:
+            near = nearest_name(key, valid)
+            raise TypeError(f"mesh_options: unknown option {key!r}{f' (did you mean {near!r}?)' if near else ''}; "
+                            f"expected {', '.join(valid)}")
+    return opts
 
 
 def stitch_rgbd_cubemap(views, face_size: int, *, center=None, mesh_options: dict | None = None,

@@ -19,7 +19,12 @@ __all__ = ["cube_rig", "equirect_camera", "ods_cameras", "ring_rig"]
 
 
 def _translation(center) -> np.ndarray:
-    c = np.asarray(center, dtype=np.float64).reshape(3)
+    try:
+        c = np.asarray(center, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"center: expected a finite 3-vector, got {center!r}") from None
+    if c.shape != (3,):
+        raise ValueError(f"center: expected a finite 3-vector, got shape {c.shape}")
     if not np.all(np.isfinite(c)):
         raise ValueError(f"center: expected a finite 3-vector, got {center!r}")
     m = np.eye(4)
