@@ -53,11 +53,15 @@ def _check_args(args) -> None:
         raise ValueError("VIEW.json / --panorama: give either view files or one --panorama COLOR RANGE")
     if args.panorama and args.stereo != "ods":
         raise ValueError("--panorama: a centre panorama is only an input for --stereo ods")
+    if args.panorama and args.center is not None:  # was silently ignored: the eyes sit at the panorama's centre
+        raise ValueError("--center: only used with view files; a --panorama is its own capture point")
     layout = args.layout
     if args.stereo == "none" and layout not in (None, "equirect", "cube"):
         raise ValueError(f"--layout: {layout} needs --stereo ods; a mono panorama is equirect or cube")
     if args.stereo == "ods" and layout == "equirect":
         raise ValueError("--layout: an ODS pair is packed top-bottom, sbs, cube or anaglyph, not equirect")
+    if layout == "cube" and args.width < 4:  # faces of width / 4 px (was "face_size ... 0" after the work)
+        raise ValueError(f"--width: --layout cube makes faces of width / 4 pixels; expected >= 4, got {args.width}")
 
 
 def _strip(faces: dict):

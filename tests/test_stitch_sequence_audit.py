@@ -184,3 +184,18 @@ def test_pack_ods_cube_face_size_zero_is_refused():
     left, right = pack_ods(pair, "cube", face_size=3)
     assert left["+x"].shape == (3, 3, 3)
     assert pack_ods(pair, "cube")[0]["+x"].shape == (4, 4, 3)
+
+
+# --------------------------------------------------------------------------- ibr stitch
+def test_stitch_cli_refuses_ignored_center_and_faceless_cube(tmp_path, capsys):
+    from samples import DATA_DIR
+
+    rig = DATA_DIR / "rig"
+    pano = ["--panorama", rig / "capture_pano_color.png", rig / "capture_pano_range.exr"]
+    out = tmp_path / "p.png"
+    assert _cli("stitch", *pano, "--stereo", "ods", "-o", out, "--width", 16, "--center", 5, 5, 5) == 1
+    assert "ibr stitch: error: --center: only used with view files; a --panorama is its own capture point" \
+        in capsys.readouterr().err
+    assert _cli("stitch", rig / "rig_00.json", "-o", out, "--width", 2, "--layout", "cube") == 1
+    assert "--width: --layout cube makes faces of width / 4 pixels; expected >= 4, got 2" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())                          # nothing written
