@@ -199,3 +199,13 @@ def test_stitch_cli_refuses_ignored_center_and_faceless_cube(tmp_path, capsys):
     assert _cli("stitch", rig / "rig_00.json", "-o", out, "--width", 2, "--layout", "cube") == 1
     assert "--width: --layout cube makes faces of width / 4 pixels; expected >= 4, got 2" in capsys.readouterr().err
     assert not list(tmp_path.iterdir())                          # nothing written
+
+
+def test_save_sequence_checks_fields_before_writing_any_view(tmp_path):
+    for kw, err in (({"fps": float("nan")}, "fps: expected a positive finite frame rate, got nan"),
+                    ({"fps": -1}, "fps: expected a positive finite frame rate, got -1"),
+                    ({"ground_truth": {"sequence": "t.json", "factr": 2}},
+                     r"ground_truth: unknown key 'factr' \(did you mean 'factor'\?\)")):
+        with pytest.raises(ValueError, match=err):
+            save_sequence([_view(0), _view(1)], tmp_path / "w.json", **kw)
+        assert not list(tmp_path.iterdir())                      # no view files left behind

@@ -210,6 +210,17 @@ def save_sequence(views: Iterable[View], manifest, *, name: str | None = None, f
         raise ValueError(f"manifest: a sequence manifest must end in .json, got {manifest}")
     if not manifest.parent.is_dir():
         raise FileNotFoundError(f"manifest: output folder {manifest.parent} does not exist")
+    # checked before any view is written (a NaN fps failed in json.dumps after every view file)
+    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float)) or not 0 < fps < math.inf):
+        raise ValueError(f"fps: expected a positive finite frame rate, got {fps!r}")
+    if name is not None and not isinstance(name, str):
+        raise TypeError(f"name: expected a string, got {type(name).__name__}")
+    if ground_truth is not None:
+        check_keys("ground_truth", ground_truth, GROUND_TRUTH_KEYS, required=GROUND_TRUTH_KEYS)
+        gf = ground_truth["factor"]
+        if not isinstance(ground_truth["sequence"], str) or isinstance(gf, bool) or not isinstance(gf, int) or gf < 1:
+            raise ValueError(f"ground_truth: expected {{'sequence': file name, 'factor': integer >= 1}}, "
+                             f"got {ground_truth!r}")
     names = []
     for i, view in enumerate(views):
         path = manifest.parent / f"{manifest.stem}_{i:04d}.json"
