@@ -212,6 +212,9 @@ def run(args) -> int:
         bar = progress(range(steps), steps, "stitch")
         next(bar)  # the bar prints step k when asked for item k + 1 (one step per rendered view)
         packed, depth, holes, seen = _stitch_frame(args, views, panorama, lambda i: next(bar, None))
+        if not seen > 0:  # an all-black panorama is no result; nothing is written
+            raise ValueError("no view sees any pixel of the panorama; check --center (and --ipd) against the "
+                             "views' poses")
         info(f"stitch: {_describe(args, n, seen, panorama is not None)}")
         _write(plan, plan.stage(out), dep and plan.stage(dep), holes_out and plan.stage(holes_out), packed, depth,
                holes)

@@ -209,3 +209,53 @@ def test_save_sequence_checks_fields_before_writing_any_view(tmp_path):
         with pytest.raises(ValueError, match=err):
             save_sequence([_view(0), _view(1)], tmp_path / "w.json", **kw)
         assert not list(tmp_path.iterdir())                      # no view files left behind
+
+
+def test_stitch_refuses_a_view_given_twice_and_a_target_no_view_sees():
+    """A duplicate moved the default centre and doubled that view's weight (pixels changed by up
+    to 117 levels); a centre far from every view gave an all-black panorama, exit 0."""
+    from panorama.stitch import equirect_camera, stitch_rgbd
+
+    a, b = _view(0), _view(1, x=0.05)
+    copy = View(a.color.copy(), a.depth.copy(), a.camera, "copy")
+    for views in ([a, b, a], [a, b, copy]):
+        with pytest.raises(ValueError, match=r"^views\[2\] \('(v0|copy)'\): the same view as views\[0\] \('v0'\)"):
+            stitch_rgbd(views, 32)
+    moved = View(a.color.copy(), a.depth, Camera.from_fov(16, 12, hfov_deg=60, world_from_cam=np.eye(4)), "moved")
+    moved.color[0, 0] ^= 1  # same camera, other colour: a different view
+    assert stitch_rgbd([a, moved], 32).color.shape == (16, 32, 3)
+    # the library reports a target no view sees in ``holes`` (test_stitch); the CLI refuses it
+    assert stitch_rgbd([a, b], equirect_camera(32, center=(1e6, 0.0, 0.0))).holes.all()
+
+
+def test_stitch_cli_refuses_a_panorama_no_view_sees(tmp_path, capsys):
+    import cli
+    from pathlib import Path
+
+    rig = Path(__file__).resolve().parents[1] / "samples" / "data" / "rig"
+    out = tmp_path / "p.png"
+    code = cli.main(["stitch", str(rig / "rig_00.json"), "--width", "64", "--center", "1e6", "0", "0", "-o", str(out)])
+    assert code == 1 and not out.exists() and list(tmp_path.iterdir()) == []
+    assert "error: no view sees any pixel of the panorama; check --center" in capsys.readouterr().err
+    assert cli.main(["stitch", str(rig / "rig_00.json"), str(rig / "rig_00.json"), "--width", "64", "-o", str(out)]) == 1
+    assert "the same view as views[0]" in capsys.readouterr().err and not out.exists()
+
+
+def test_ring_rig_and_batch_files_name_what_is_wrong(tmp_path):
+    from ibr.sequence import load_jobs
+    from panorama.stitch.rigs import ring_rig
+
+    with pytest.raises(TypeError, match=r"^radius: expected a real number, got 'a'$"):
+        ring_rig(4, radius="a")
+    with pytest.raises(ValueError, match=r"^vfov_deg: expected 0 < fov < 180, got 200$"):
+        ring_rig(4, vfov_deg=200)  # was blamed on fy
+    with pytest.raises(ValueError, match=r"^pitches_deg\[1\]: expected a finite number"):
+        ring_rig(4, pitches_deg=(0.0, float("nan")))  # was blamed on world_from_cam
+    assert len(ring_rig(4, pitches_deg=(0.0, 30.0), vfov_deg=60)) == 8
+    path = tmp_path / "jobs.json"
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 1, "jbos": []}))
+    with pytest.raises(ValueError, match=r"unknown key 'jbos' \(did you mean 'jobs'\?\)"):
+        load_jobs(path)
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 2, "jobs": [["warp", "a", "-o", "b.png"]]}))
+    with pytest.raises(ValueError, match=r"'version' must be 1, got 2"):
+        load_jobs(path)

@@ -216,8 +216,11 @@ def load_jobs(path) -> list[Job]:
     except (UnicodeDecodeError, ValueError) as exc:
         raise ValueError(f"jobs: {path} is not valid JSON ({exc})") from None
     if isinstance(doc, dict):
+        check_keys(f"jobs: {path}", doc, ("format", "version", "jobs"), required=("jobs",))
         if doc.get("format") not in (None, BATCH_FORMAT):
             raise ValueError(f"jobs: {path}: 'format' must be {BATCH_FORMAT!r}, got {doc.get('format')!r}")
+        if doc.get("version", 1) != 1 or isinstance(doc.get("version"), bool):
+            raise ValueError(f"jobs: {path}: 'version' must be 1, got {doc.get('version')!r}")
         entries = doc.get("jobs")
     else:
         entries = doc

@@ -67,7 +67,22 @@ def check_views(views) -> list[View]:
         channels.add(1 if v.color.ndim == 2 else v.color.shape[2])
     if len(channels) > 1:
         raise ValueError(f"views: every view needs the same number of colour channels, got {sorted(channels)}")
+    _check_no_duplicates(views)
     return views
+
+
+def _check_no_duplicates(views) -> None:
+    """Refuse a view given twice (the same object, or the same camera with the same colour and
+    depth): it would move the default centre and double that view's blend weight."""
+    seen: dict = {}
+    for i, v in enumerate(views):
+        c = v.camera
+        key = (c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.world_from_cam.tobytes())
+        for j in seen.get(key, []):
+            w = views[j]
+            if w is v or (np.array_equal(w.color, v.color) and np.array_equal(w.depth, v.depth, equal_nan=True)):
+                raise ValueError(f"views[{i}] ({v.name!r}): the same view as views[{j}] ({w.name!r}); give each view once")
+        seen.setdefault(key, []).append(i)
 
 
 def _to_dtype(color: np.ndarray, dtype) -> np.ndarray:

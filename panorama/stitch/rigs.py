@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from ibr.base.camera import Camera
+from ibr.base.validate import check_array, check_finite_scalar
 from ibr.base.ray_camera import SphericalCamera
 
 from ..directions import WORLD_FROM_FACE
@@ -72,9 +73,15 @@ def ring_rig(n: int, *, radius: float = 0.1, width: int = 640, height: int = 480
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n: expected a positive integer, got {n!r}")
-    if not (math.isfinite(radius) and radius >= 0):
+    radius = check_finite_scalar("radius", radius)
+    if radius < 0:
         raise ValueError(f"radius: expected a finite distance >= 0, got {radius!r}")
-    c = np.asarray(center, dtype=np.float64)
+    if vfov_deg is not None and not 0 < check_finite_scalar("vfov_deg", vfov_deg) < 180:
+        raise ValueError(f"vfov_deg: expected 0 < fov < 180, got {vfov_deg!r}")
+    pitches_deg = [check_finite_scalar(f"pitches_deg[{i}]", x) for i, x in enumerate(np.atleast_1d(pitches_deg))]
+    c = check_array("center", center, shape=(3,), dtype_kind="fiu").astype(np.float64)
+    if not np.isfinite(c).all():
+        raise ValueError(f"center: expected finite coordinates, got {c.tolist()}")
     cams = []
     for pitch in pitches_deg:
         for k in range(int(n)):
