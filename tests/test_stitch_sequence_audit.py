@@ -259,3 +259,11 @@ def test_ring_rig_and_batch_files_name_what_is_wrong(tmp_path):
     path.write_text(json.dumps({"format": "ibr-batch", "version": 2, "jobs": [["warp", "a", "-o", "b.png"]]}))
     with pytest.raises(ValueError, match=r"'version' must be 1, got 2"):
         load_jobs(path)
+
+
+def test_stitch_blend_option_typos_name_the_nearest_option():
+    from panorama.stitch import stitch_rgbd
+
+    with pytest.raises(TypeError, match=r"^blend_options: unknown option 'rel_tl' \(did you mean 'rel_tol'\?\)"):
+        stitch_rgbd([_view(0)], 32, rel_tl=0.05)  # was Python's "unexpected keyword argument"
+    assert stitch_rgbd([_view(0)], 32, rel_tol=0.05, sigma_deg=5.0).color.shape == (16, 32, 3)

@@ -139,25 +139,33 @@ def stitch_rgbd(views, camera, *, mesh_options: dict | None = None, progress=Non
         camera = equirect_camera(int(camera), center=np.mean([v.camera.position for v in views], axis=0))
     if not isinstance(camera, (SphericalCamera, Camera)):
         raise TypeError(f"camera: expected a SphericalCamera, a Camera or an int width, got {type(camera).__name__}")
+    _check_keywords("blend_options", blend_options, blend_sources, skip=("progress",))
     return _render(views, camera, _mesh_options(mesh_options), blend_options, progress)
 
 
 def _mesh_options(mesh_options) -> dict:
     """``mesh_options`` checked: a dict of :func:`ibr.build_mesh` keywords (a typo is named with the
     nearest valid one instead of build_mesh's "unexpected keyword argument")."""
-    import inspect
-
-    from ibr.base.validate import nearest_name
     from ibr.mesh import build_mesh
 
     opts = check_mesh_options(mesh_options)
-    valid = [n for n, p in inspect.signature(build_mesh).parameters.items() if p.kind == p.KEYWORD_ONLY]
-    for key in opts:
+    _check_keywords("mesh_options", opts, build_mesh)
+    return opts
+
+
+def _check_keywords(name: str, options: dict, function, skip=()) -> None:
+    """Refuse keys of ``options`` that are not keyword-only parameters of ``function`` (besides
+    ``skip``), naming the nearest valid one (TypeError, as Python's own message would be)."""
+    import inspect
+
+    from ibr.base.validate import nearest_name
+
+    valid = [n for n, p in inspect.signature(function).parameters.items() if p.kind == p.KEYWORD_ONLY and n not in skip]
+    for key in options:
         if key not in valid:
             near = nearest_name(key, valid)
-            raise TypeError(f"mesh_options: unknown option {key!r}{f' (did you mean {near!r}?)' if near else ''}; "
+            raise TypeError(f"{name}: unknown option {key!r}{f' (did you mean {near!r}?)' if near else ''}; "
                             f"expected {', '.join(valid)}")
-    return opts
 
 
 def stitch_rgbd_cubemap(views, face_size: int, *, center=None, mesh_options: dict | None = None,
