@@ -7,7 +7,21 @@ HELP = "stitch posed RGB-D views into a 360-degree panorama, mono or omnidirecti
 LAYOUTS = ("top-bottom", "sbs", "cube", "anaglyph")
 
 
+def _even_width(text: str) -> int:
+    """An argparse type: an even number of pixels in [2, 32768] (the equirect is width x width / 2)."""
+    import argparse
+
+    from commands._common import number_in
+
+    value = number_in(2, 32768, integer=True, what="a number of pixels")(text)
+    if value % 2:
+        raise argparse.ArgumentTypeError(f"expected an even number of pixels (height = width / 2), got {text}")
+    return value
+
+
 def add_arguments(parser) -> None:
+    from commands._common import positive_float
+
     parser.add_argument("views", nargs="*", metavar="VIEW.json",
                         help="posed RGB-D view files (each with depth and a world_from_cam pose); or one "
                              "sequence per rig camera (manifest or folder of numbered views, all of one "
@@ -24,10 +38,10 @@ def add_arguments(parser) -> None:
                              "anaglyph); default "
                              "<output stem>_depth.exr; 'none' to skip")
     parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (255 = no view saw it)")
-    parser.add_argument("--width", type=int, default=4096, help="equirect width per eye (even; default 4096)")
+    parser.add_argument("--width", type=_even_width, default=4096, help="equirect width per eye (even; default 4096)")
     parser.add_argument("--stereo", choices=("none", "ods"), default="none",
                         help="mono panorama (default) or omnidirectional stereo")
-    parser.add_argument("--ipd", type=float, default=0.064,
+    parser.add_argument("--ipd", type=positive_float, default=0.064,
                         help="interpupillary distance in scene units (default 0.064, metres)")
     parser.add_argument("--fade", type=float, nargs=2, default=(60.0, 80.0), metavar=("START", "END"),
                         help="latitudes (deg) where the ODS eye baseline fades to 0 (default 60 80)")
@@ -42,11 +56,7 @@ def add_arguments(parser) -> None:
 
 
 def _check_args(args) -> None:
-    if args.width < 2 or args.width % 2 or args.width > 32768:
-        raise ValueError(f"--width: expected an even number of pixels in [2, 32768], got {args.width}")
-    if not args.ipd > 0:
-        raise ValueError(f"--ipd: expected a positive interpupillary distance, got {args.ipd}")
-    a, b = args.fade
+    a, b = args.fade  # (--width and --ipd are checked by their argparse types: usage errors)
     if not 0 < a < b <= 90:
         raise ValueError(f"--fade: expected 0 < START < END <= 90 (degrees of latitude), got {a:g} {b:g}")
     if bool(args.views) == bool(args.panorama):

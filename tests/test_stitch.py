@@ -281,15 +281,16 @@ def test_cli_stitch_from_the_bundled_centre_panorama(tmp_path):
     assert holes.shape == (256, 256) and 0 < (holes > 0).mean() < 0.05
 
 
-@pytest.mark.parametrize("extra, message", [
-    (["--stereo", "ods", "--ipd", "0"], "--ipd"),
-    (["--stereo", "ods", "--fade", "80", "60"], "--fade"),
-    (["--width", "101"], "--width"),
-    (["--layout", "sbs"], "--layout"),
+@pytest.mark.parametrize("extra, message, code", [
+    (["--stereo", "ods", "--ipd", "0"], "argument --ipd: expected a positive number", 2),  # usage errors: exit 2
+    (["--width", "101"], "argument --width: expected an even number of pixels", 2),
+    (["--width", "0"], "argument --width: expected a number of pixels >= 2 and <= 32768", 2),
+    (["--stereo", "ods", "--fade", "80", "60"], "--fade", 1),
+    (["--layout", "sbs"], "--layout", 1),
 ])
-def test_cli_stitch_bad_arguments(tmp_path, capsys, extra, message):
+def test_cli_stitch_bad_arguments(tmp_path, capsys, extra, message, code):
     out = tmp_path / "x.png"
-    assert cli.main(["stitch", *RIG[:2], "-o", str(out), *extra]) == 1
+    assert cli.main(["stitch", *RIG[:2], "-o", str(out), *extra]) == code
     assert message in capsys.readouterr().err
     assert not out.exists() and list(tmp_path.iterdir()) == []
 
