@@ -267,3 +267,11 @@ def test_stitch_blend_option_typos_name_the_nearest_option():
     with pytest.raises(TypeError, match=r"^blend_options: unknown option 'rel_tl' \(did you mean 'rel_tol'\?\)"):
         stitch_rgbd([_view(0)], 32, rel_tl=0.05)  # was Python's "unexpected keyword argument"
     assert stitch_rgbd([_view(0)], 32, rel_tol=0.05, sigma_deg=5.0).color.shape == (16, 32, 3)
+
+
+@pytest.mark.parametrize("width", [0, np.int64(0), 7])
+def test_stitch_int_camera_names_camera(width):
+    from panorama.stitch import stitch_rgbd
+
+    with pytest.raises(ValueError, match=r"^camera: an int is the width of a mono equirect, even and >= 2"):
+        stitch_rgbd([_view(0)], width)  # was named 'width' (of equirect_camera)

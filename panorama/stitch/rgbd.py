@@ -136,6 +136,8 @@ def stitch_rgbd(views, camera, *, mesh_options: dict | None = None, progress=Non
     if isinstance(camera, (int, np.integer)) and not isinstance(camera, bool):
         from .rigs import equirect_camera
 
+        if camera < 2 or camera % 2:
+            raise ValueError(f"camera: an int is the width of a mono equirect, even and >= 2; got {int(camera)}")
         camera = equirect_camera(int(camera), center=np.mean([v.camera.position for v in views], axis=0))
     if not isinstance(camera, (SphericalCamera, Camera)):
         raise TypeError(f"camera: expected a SphericalCamera, a Camera or an int width, got {type(camera).__name__}")
