@@ -42,6 +42,7 @@ def add_arguments(parser) -> None:
 
 def _export(args) -> int:
     from ibr.io.importers import export_nerf
+    from ibr.io.importers.nerf import _expand
     from ibr.io.outputs import OutputPlan
 
     if not args.src:
@@ -51,6 +52,8 @@ def _export(args) -> int:
     with OutputPlan("ibr import", log=info) as plan:
         for s in args.src:
             plan.add_input("SRC", s)
+        for v in _expand(args.src):  # the views a sequence manifest lists are inputs too
+            plan.add_input("SRC", v)
         out = plan.add_file("--out", args.out, (".json",))
         plan.check()
         notes = export_nerf(args.src, plan.stage(out), base=Path(args.out).resolve().parent)
