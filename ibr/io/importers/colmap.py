@@ -122,7 +122,16 @@ def read_colmap(model_dir, image_dir, *, depth_dir=None, depth_scale: float | No
         except ValueError:
             raise ValueError(f"{where}: bad numbers in {s!r}") from None
         name = " ".join(parts[9:])
-        k += 2  # the POINTS2D line follows (possibly empty)
+        if k + 1 < len(lines):  # the POINTS2D line follows (possibly empty): X Y POINT3D_ID triples
+            pn, ps = lines[k + 1]
+            try:
+                points = [float(x) for x in ps.split()]
+            except ValueError:
+                points = None
+            if points is None or len(points) % 3:
+                raise ValueError(f"colmap images.txt line {pn}: expected the POINTS2D line of image {name!r} "
+                                 f"(X Y POINT3D_ID triples, or empty), got {ps[:60]!r}")
+        k += 2
         if cid not in cams:
             raise ValueError(f"{where}: image {name!r} uses camera {cid}, which cameras.txt does not define")
         model, w, h, params = cams[cid]
