@@ -110,6 +110,9 @@ def run(args) -> int:
         names = [Path(p).name for p in args.images]
         if args.reference >= len(images):
             raise ValueError(f"--reference: expected a photo index 0..{len(images) - 1}, got {args.reference}")
+        if args.keep_exposure_of is not None and args.keep_exposure_of >= len(images):
+            raise ValueError(f"--keep-exposure-of: expected a photo index 0..{len(images) - 1}, "
+                             f"got {args.keep_exposure_of}")
         start = time.perf_counter()
 
         def progress(step, done, total):

@@ -216,6 +216,10 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
         raise ValueError(f"width: expected an even integer >= 4, got {width!r}")
     images, names, focal_px = _check_inputs(images, names, masks, focal_px)
     n = len(images)
+    for arg, value in (("reference", reference), ("exposure_reference", exposure_reference)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer))
+                                  or not 0 <= value < n):
+            raise ValueError(f"{arg}: expected a photo index 0..{n - 1}, got {value!r}")
     report = StitchReport(images=[ImageReport(k, names[k]) for k in range(n)])
     secs = report.seconds
 
