@@ -129,6 +129,8 @@ def run(args) -> int:
         pano = result.image
         if out.suffix.lower() in (".jpg", ".jpeg") or (out.suffix.lower() == ".png" and pano.dtype.kind == "f"):
             pano = to_uint8(pano)
+        elif out.suffix.lower() == ".exr" and pano.dtype.kind in "ui":  # EXR stores floats: [0, 1] units
+            pano = (pano.astype(np.float32) / np.float32(np.iinfo(pano.dtype).max)).astype(np.float32)
         write_image(plan.stage(target), pano)
         if cube is not None:
             size = args.face_size or int(np.ceil(pano.shape[1] / np.pi))
