@@ -139,6 +139,11 @@ def _serve(args, pano, layout, depth=None) -> int:
                     plan.add_input("PANO", args.pano)
                     if args.depth is not None:
                         plan.add_input("--depth", args.depth)
+                    if tour is not None:  # each scene's panorama (a file, or a folder of faces) is an input
+                        from panorama.tour import load_tour
+
+                        for sid, sc in load_tour(tour)["scenes"].items():
+                            plan.add_input(f"scene {sid!r} panorama", sc["panorama"])
                     site = plan.add_folder("--site", folder, SITE_FILES + ("scene-*-*.png", "tile-*.png"))
                     plan.check()
                     write(plan.stage(site))
