@@ -1,0 +1,114 @@
+"""Audit regressions: importers, photo stitching and the viewer's site/tour generation with bad or
+awkward inputs (each test failed on the code before its fix)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import cli
+from ibr.io import read_image, write_image
+
+
+def _nerf_folder(tmp_path, n=2):
+    src = tmp_path / "src"
+    (src / "images").mkdir(parents=True)
+    frames = []
+    for i in range(n):
+        write_image(src / "images" / f"f{i}.png", (np.random.default_rng(i).random((12, 16, 3)) * 255).astype(np.uint8))
+        pose = np.eye(4)
+        pose[0, 3] = 0.1 * i
+        frames.append({"file_path": f"images/f{i}", "transform_matrix": pose.tolist()})
+    (src / "transforms.json").write_text(json.dumps({"camera_angle_x": 1.0, "frames": frames}))
+    return src
+
+
+def test_export_nerf_never_overwrites_a_view_listed_through_a_manifest(tmp_path, capsys):
+    src = _nerf_folder(tmp_path)
+    views = tmp_path / "views"
+    assert cli.main(["import", "nerf", str(src / "transforms.json"), "--out", str(views)]) == 0
+    before = (views / "f0.json").read_text()
+    capsys.readouterr()
+    rc = cli.main(["import", "export-nerf", str(views / "nerf.json"), "--out", str(views / "f0.json")])
+    assert rc == 1
+    assert "refusing to overwrite an input" in capsys.readouterr().err
+    assert (views / "f0.json").read_text() == before
+
+
+def _colmap(tmp_path, images_txt):
+    src = _nerf_folder(tmp_path)
+    model = tmp_path / "sparse"
+    model.mkdir()
+    (model / "cameras.txt").write_text("1 PINHOLE 16 12 14.6 14.6 8 6\n")
+    (model / "images.txt").write_text(images_txt)
+    return model, src / "images"
+
+
+def test_colmap_images_without_points_lines_are_refused_not_dropped(tmp_path):
+    from ibr.io.importers import read_frames
+
+    # every image line must be followed by its POINTS2D line: without them, image 2 was read as the
+    # points of image 1 and silently left out (one view written, exit 0)
+    model, images = _colmap(tmp_path, "1 1 0 0 0 0 0 0 1 f0.png\n2 1 0 0 0 0.1 0 0 1 f1.png\n")
+    with pytest.raises(ValueError, match=r"images.txt line 2: .*POINTS2D"):
+        read_frames("colmap", model, images=images)
+    # the usual layouts still read: empty points lines, and points triples
+    model2, _ = _colmap(tmp_path / "b", "1 1 0 0 0 0 0 0 1 f0.png\n\n2 1 0 0 0 0.1 0 0 1 f1.png\n1.5 2.5 -1 3 4 7\n")
+    frames = read_frames("colmap", model2, images=images)
+    assert [f.name for f in frames] == ["f0", "f1"]
+    assert frames[1].camera.world_from_cam[0, 3] == pytest.approx(-0.1)
+
+
+def test_stitch_photos_exposure_reference_out_of_range_is_named(tmp_path, capsys):
+    from panorama.photo import stitch_photos
+    from panorama.photo.testdata import cut_photos, photo_sphere
+
+    ps = cut_photos(photo_sphere(512), [(0, 0), (50, 0)], width=240, height=180)
+    with pytest.raises(ValueError, match="exposure_reference"):
+        stitch_photos(ps.images, width=512, exposure_reference=7)
+    paths = []
+    for k, im in enumerate(ps.images):
+        write_image(tmp_path / f"p{k}.png", im)
+        paths.append(str(tmp_path / f"p{k}.png"))
+    rc = cli.main(["stitch-photos", *paths, "-o", str(tmp_path / "s.png"), "--keep-exposure-of", "7"])
+    assert rc == 1
+    assert "--keep-exposure-of" in capsys.readouterr().err
+    assert not (tmp_path / "s.png").exists()
+
+
+def test_stitch_photos_exr_output_from_8bit_photos(tmp_path):
+    from panorama.photo.testdata import cut_photos, photo_sphere
+
+    ps = cut_photos(photo_sphere(512), [(0, 0), (50, 0)], width=240, height=180)
+    paths = []
+    for k, im in enumerate(ps.images):
+        write_image(tmp_path / f"p{k}.png", im)
+        paths.append(str(tmp_path / f"p{k}.png"))
+    assert cli.main(["stitch-photos", *paths, "-o", str(tmp_path / "s.png"), "--width", "512"]) == 0
+    # -o .exr (offered by --help) failed after all the work: 'a .exr file stores float32 ... got uint8'
+    assert cli.main(["stitch-photos", *paths, "-o", str(tmp_path / "s.exr"), "--width", "512",
+                     "--cube", str(tmp_path / "faces")]) == 0
+    png, exr = read_image(tmp_path / "s.png"), read_image(tmp_path / "s.exr")
+    assert exr.dtype == np.float32
+    assert np.abs(exr * 255.0 - png).max() < 0.51  # the same picture in [0, 1] units
+    assert (tmp_path / "faces" / "pz.exr").is_file()
+
+
+def test_tour_site_never_removes_a_scene_panorama_in_the_site_folder(tmp_path, capsys):
+    import panorama
+    from panorama.files import write_cubemap
+
+    site = tmp_path / "site"
+    site.mkdir()
+    pano = (np.random.default_rng(0).random((64, 128, 3)) * 255).astype(np.uint8)
+    write_cubemap(site, panorama.equirect_to_cubemap(pano, 32, layout="list"), layout="files", ext=".png")
+    write_image(tmp_path / "pano.png", pano)
+    (site / "tour.json").write_text(json.dumps({"scenes": {"a": {"panorama": "."},
+                                                           "b": {"panorama": "../pano.png"}}}))
+    before = {p.name: p.read_bytes() for p in site.iterdir()}
+    rc = cli.main(["view", str(site / "tour.json"), "--site", str(site), "--force"])
+    assert rc == 1
+    assert "input" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in site.iterdir()} == before
