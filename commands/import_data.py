@@ -15,7 +15,17 @@ from ._common import info, positive_float
 HELP = ("import RGB-D data from other tools (NeRF transforms.json, COLMAP, TUM RGB-D; Blender via a script) "
         "as view files, or export view files as transforms.json")
 
-_PATTERNS = ("*.json", "*_color.png", "*_color.exr", "*_depth.exr")
+
+def _written_names(frames, sequence_name: str) -> tuple:
+    """The exact file names an import writes into ``--out`` (escaped as glob patterns): each
+    frame's view file, colour and depth, and the manifest. Only these are replaced there; a bare
+    ``*.json`` pattern removed every JSON file of the folder, the user's own included (#12)."""
+    import glob
+
+    names = [f"{sequence_name}.json"] if len(frames) > 1 else []  # the manifest (write_views)
+    for f in frames:
+        names += [f"{f.name}.json", f"{f.name}_color.png", f"{f.name}_color.exr", f"{f.name}_depth.exr"]
+    return tuple(glob.escape(n) for n in names)
 
 
 def add_arguments(parser) -> None:
@@ -95,7 +105,7 @@ def run(args) -> int:
         for f in frames:
             plan.add_input("SRC", f.color)
             plan.add_input("SRC", f.depth)
-        folder = plan.add_folder("--out", args.out, _PATTERNS)
+        folder = plan.add_folder("--out", args.out, _written_names(frames, args.name or args.format))
         plan.check()
         write_views(frames, plan.stage(folder), report, sequence_name=args.name or args.format,
                     progress=lambda k, n: info(f"import: {k}/{n} frames") if k == n or k % 10 == 0 else None)

@@ -112,3 +112,24 @@ def test_tour_site_never_removes_a_scene_panorama_in_the_site_folder(tmp_path, c
     assert rc == 1
     assert "input" in capsys.readouterr().err
     assert {p.name: p.read_bytes() for p in site.iterdir()} == before
+
+
+def test_import_into_a_folder_replaces_only_its_own_files(tmp_path, capsys):
+    """``*.json`` was an output pattern of ``ibr import --out``: every JSON file already in the
+    folder (the user's notes, a tour) was removed as 'an earlier run's'. Now only the files this
+    import writes are replaced, and a second run over the first replaces exactly those."""
+    src = _nerf_folder(tmp_path)
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "notes.json").write_text("{}")
+    (out / "tour.json").write_text('{"format": "ibr-tour"}')
+    (out / "f0_color.jpg").write_bytes(b"mine")
+    assert cli.main(["import", "nerf", str(src / "transforms.json"), "--out", str(out)]) == 0
+    assert (out / "notes.json").read_text() == "{}" and (out / "tour.json").read_text() == '{"format": "ibr-tour"}'
+    assert (out / "f0_color.jpg").read_bytes() == b"mine"
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(["notes.json", "tour.json", "f0_color.jpg", "nerf.json", "f0.json", "f1.json",
+                            "f0_color.png", "f1_color.png"]), names
+    first = (out / "f1.json").read_text()
+    assert cli.main(["import", "nerf", str(src / "transforms.json"), "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == names and (out / "f1.json").read_text() == first
