@@ -133,3 +133,44 @@ def test_import_into_a_folder_replaces_only_its_own_files(tmp_path, capsys):
     first = (out / "f1.json").read_text()
     assert cli.main(["import", "nerf", str(src / "transforms.json"), "--out", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == names and (out / "f1.json").read_text() == first
+
+
+def _tum_folder(folder, rgb_time="1.0", w=16, h=12):
+    folder.mkdir(parents=True)
+    write_image(folder / "rgb_0.png", np.zeros((h, w, 3), np.uint8))
+    write_image(folder / "depth_0.png", np.full((h, w), 5000, np.uint16))
+    (folder / "rgb.txt").write_text(f"{rgb_time} rgb_0.png\n")
+    (folder / "depth.txt").write_text("1.0 depth_0.png\n")
+    (folder / "groundtruth.txt").write_text("1.0 0 0 0 0 0 0 1\n")
+    return folder
+
+
+def test_importers_refuse_silent_wrong_cameras(tmp_path):
+    """TUM's 640 x 480 default intrinsics were applied to images of any size (cx 319.5 on a 16 px
+    image); a NaN timestamp dropped its frame quietly; a COLMAP camera id defined twice kept the
+    last; NeRF's fl_y beside camera_angle_x was ignored (fy = fx), and camera_angle_y >= pi was
+    blamed on fy."""
+    from ibr.io.importers import read_frames
+
+    with pytest.raises(ValueError, match=r"^intrinsics: the default TUM calibration is for 640 x 480 images, "
+                                         r"these are 16 x 12"):
+        read_frames("tum", _tum_folder(tmp_path / "t1"))
+    frames = read_frames("tum", _tum_folder(tmp_path / "t2"), intrinsics=(14.0, 14.0, 7.5, 5.5))
+    assert frames[0].camera.cx == 7.5
+    with pytest.raises(ValueError, match=r"^tum rgb.txt line 1: bad timestamp 'nan'"):
+        read_frames("tum", _tum_folder(tmp_path / "t3", rgb_time="nan"), intrinsics=(14.0, 14.0, 7.5, 5.5))
+    model, images = _colmap(tmp_path / "c", "1 1 0 0 0 0 0 0 1 f0.png\n\n")
+    (model / "cameras.txt").write_text("1 PINHOLE 16 12 14.6 14.6 8 6\n1 PINHOLE 16 12 99 99 8 6\n")
+    with pytest.raises(ValueError, match=r"^colmap cameras.txt line 2: camera id 1 is defined twice"):
+        read_frames("colmap", model, images=images)
+    src = _nerf_folder(tmp_path / "n")
+    doc = json.loads((src / "transforms.json").read_text())
+    doc["fl_y"] = 20.0
+    (src / "transforms.json").write_text(json.dumps(doc))
+    cam = read_frames("nerf", src / "transforms.json")[0].camera
+    assert cam.fx == pytest.approx(8.0 / np.tan(0.5)) and cam.fy == 20.0
+    del doc["fl_y"]
+    doc["camera_angle_y"] = 4.0
+    (src / "transforms.json").write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match=r"'camera_angle_y' must be below pi"):
+        read_frames("nerf", src / "transforms.json")

@@ -56,6 +56,8 @@ def read_cameras(path: Path) -> dict[int, tuple[str, int, int, list[float]]]:
             raise ValueError(f"{where}: bad numbers in {s!r}") from None
         if len(params) != MODELS[model]:
             raise ValueError(f"{where}: {model} takes {MODELS[model]} parameters, got {len(params)}")
+        if cid in cams:  # the later line silently replaced the first
+            raise ValueError(f"{where}: camera id {cid} is defined twice")
         cams[cid] = (model, w, h, params)
     return cams
 

@@ -63,16 +63,27 @@ def _camera(where: str, top: dict, frame: dict, size: tuple[int, int] | None, po
         fx = _number(where, d, "fl_x")
         fy = _number(where, d, "fl_y") if "fl_y" in d else fx
     elif "camera_angle_x" in d:
-        ax = _number(where, d, "camera_angle_x")
-        if not ax < math.pi:
-            raise ValueError(f"{where}: 'camera_angle_x' must be below pi (radians), got {ax}")
-        fx = 0.5 * w / math.tan(0.5 * ax)
-        fy = 0.5 * h / math.tan(0.5 * _number(where, d, "camera_angle_y")) if "camera_angle_y" in d else fx
+        fx = 0.5 * w / math.tan(0.5 * _angle(where, d, "camera_angle_x"))
+        if "fl_y" in d:  # an explicit fy beside the angle (was ignored: fy = fx)
+            fy = _number(where, d, "fl_y")
+        elif "camera_angle_y" in d:
+            fy = 0.5 * h / math.tan(0.5 * _angle(where, d, "camera_angle_y"))
+        else:
+            fy = fx
     else:
         raise ValueError(f"{where}: no focal length ('fl_x' or 'camera_angle_x')")
     cx = (_number(where, d, "cx", positive=False) if "cx" in d else 0.5 * w) - 0.5
     cy = (_number(where, d, "cy", positive=False) if "cy" in d else 0.5 * h) - 0.5
     return Camera(fx, fy, cx, cy, int(w), int(h), pose)
+
+
+def _angle(where: str, d: dict, key: str) -> float:
+    """A field-of-view angle in radians, 0 < angle < pi (a larger one gave a negative focal length
+    blamed on fx/fy)."""
+    a = _number(where, d, key)
+    if not a < math.pi:
+        raise ValueError(f"{where}: {key!r} must be below pi (radians), got {a}")
+    return a
 
 
 def _resolve(base: Path, name, where: str, key: str) -> Path:

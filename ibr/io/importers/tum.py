@@ -14,6 +14,7 @@ size is read from the first colour image.
 from __future__ import annotations
 
 import bisect
+import math
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +45,9 @@ def _table(path: Path, ncols: int) -> list[tuple[float, list[str]]]:
         try:
             t = float(parts[0])
         except ValueError:
-            raise ValueError(f"tum {path.name} line {n}: bad timestamp {parts[0]!r}") from None
+            t = math.nan
+        if not math.isfinite(t):  # a NaN time matched nothing and its frame was dropped quietly
+            raise ValueError(f"tum {path.name} line {n}: bad timestamp {parts[0]!r}")
         rows.append((t, parts[1:]))
     rows.sort(key=lambda r: r[0])
     return rows
@@ -95,6 +98,9 @@ def read_tum(folder, *, intrinsics=TUM_INTRINSICS, size=None, tolerance: float =
 
             h, w = read_image(color, what="tum colour").shape[:2]
             size = (w, h)
+            if tuple(float(x) for x in intrinsics) == TUM_INTRINSICS and size != (640, 480):
+                raise ValueError(f"intrinsics: the default TUM calibration is for 640 x 480 images, these are "
+                                 f"{w} x {h} ({color.name}); give the camera's fx fy cx cy")
         cam = Camera(fx, fy, cx, cy, int(size[0]), int(size[1]), pose)
         frames.append(Frame(f"tum_{t:.6f}".replace(".", "_"), color, cam, dpath, TUM_DEPTH_SCALE))
     if not frames:
