@@ -174,3 +174,22 @@ def test_importers_refuse_silent_wrong_cameras(tmp_path):
     (src / "transforms.json").write_text(json.dumps(doc))
     with pytest.raises(ValueError, match=r"'camera_angle_y' must be below pi"):
         read_frames("nerf", src / "transforms.json")
+
+
+def test_importer_camera_errors_name_the_file_and_line(tmp_path):
+    from ibr.io.importers import read_frames
+
+    model, images = _colmap(tmp_path / "c", "1 0 0 0 0 0 0 0 1 f0.png\n\n")  # a zero quaternion
+    with pytest.raises(ValueError, match=r"^colmap images.txt line 1: image 'f0.png' \(camera 1\): quaternion: "):
+        read_frames("colmap", model, images=images)
+    (model / "cameras.txt").write_text("1 PINHOLE 16 12 -14.6 14.6 8 6\n")
+    (model / "images.txt").write_text("1 1 0 0 0 0 0 0 1 f0.png\n\n")
+    with pytest.raises(ValueError, match=r"^colmap images.txt line 1: image 'f0.png' \(camera 1\): fx: "):
+        read_frames("colmap", model, images=images)
+    folder = _tum_folder(tmp_path / "t")
+    (folder / "groundtruth.txt").write_text("1.0 0 0 0 0 0 0 0\n")
+    with pytest.raises(ValueError, match=r"^tum groundtruth.txt: the pose at t = 1.0: quaternion: "):
+        read_frames("tum", folder, intrinsics=(14.0, 14.0, 7.5, 5.5))
+    (folder / "groundtruth.txt").write_text("1.0 0 0 0 0 0 0 1\n")
+    with pytest.raises(ValueError, match=r"^tum: the camera of rgb_0.png: fx: "):
+        read_frames("tum", folder, intrinsics=(-14.0, 14.0, 7.5, 5.5))

@@ -137,9 +137,12 @@ def read_colmap(model_dir, image_dir, *, depth_dir=None, depth_scale: float | No
         if cid not in cams:
             raise ValueError(f"{where}: image {name!r} uses camera {cid}, which cameras.txt does not define")
         model, w, h, params = cams[cid]
-        fx, fy, cx, cy, dist = _intrinsics(model, params)
-        pose = pose_from_world_to_camera(rotation_from_quaternion(qw, qx, qy, qz), (tx, ty, tz))
-        cam = Camera(fx, fy, cx - 0.5, cy - 0.5, w, h, pose)
+        try:  # a zero or non-finite quaternion, a NaN translation, a focal length <= 0, width 0
+            fx, fy, cx, cy, dist = _intrinsics(model, params)
+            pose = pose_from_world_to_camera(rotation_from_quaternion(qw, qx, qy, qz), (tx, ty, tz))
+            cam = Camera(fx, fy, cx - 0.5, cy - 0.5, w, h, pose)
+        except ValueError as exc:  # the file and line, not only the value (#12)
+            raise ValueError(f"{where}: image {name!r} (camera {cid}): {exc}") from None
         color = image_dir / name
         if not color.is_file():
             raise FileNotFoundError(f"{where}: image {name!r} is not in {image_dir}")

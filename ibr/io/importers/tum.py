@@ -87,8 +87,13 @@ def read_tum(folder, *, intrinsics=TUM_INTRINSICS, size=None, tolerance: float =
         except ValueError:
             raise ValueError(f"tum groundtruth.txt: bad numbers at t = {gt[gi][0]}") from None
         pose = np.eye(4)
-        pose[:3, :3] = rotation_from_quaternion(qw, qx, qy, qz)
+        try:
+            pose[:3, :3] = rotation_from_quaternion(qw, qx, qy, qz)
+        except ValueError as exc:
+            raise ValueError(f"tum groundtruth.txt: the pose at t = {gt[gi][0]}: {exc}") from None
         pose[:3, 3] = (tx, ty, tz)
+        if not np.isfinite(pose).all():
+            raise ValueError(f"tum groundtruth.txt: the pose at t = {gt[gi][0]}: expected finite numbers")
         color, dpath = folder / name, folder / depth[di][1][0]
         for p in (color, dpath):
             if not p.is_file():
@@ -101,7 +106,10 @@ def read_tum(folder, *, intrinsics=TUM_INTRINSICS, size=None, tolerance: float =
             if tuple(float(x) for x in intrinsics) == TUM_INTRINSICS and size != (640, 480):
                 raise ValueError(f"intrinsics: the default TUM calibration is for 640 x 480 images, these are "
                                  f"{w} x {h} ({color.name}); give the camera's fx fy cx cy")
-        cam = Camera(fx, fy, cx, cy, int(size[0]), int(size[1]), pose)
+        try:
+            cam = Camera(fx, fy, cx, cy, int(size[0]), int(size[1]), pose)
+        except ValueError as exc:  # a focal length <= 0 from --intrinsics, ...
+            raise ValueError(f"tum: the camera of {name}: {exc}") from None
         frames.append(Frame(f"tum_{t:.6f}".replace(".", "_"), color, cam, dpath, TUM_DEPTH_SCALE))
     if not frames:
         raise ValueError(f"tum: no colour frame of {folder} has both a depth frame and a pose within "
