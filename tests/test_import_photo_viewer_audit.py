@@ -193,3 +193,15 @@ def test_importer_camera_errors_name_the_file_and_line(tmp_path):
     (folder / "groundtruth.txt").write_text("1.0 0 0 0 0 0 0 1\n")
     with pytest.raises(ValueError, match=r"^tum: the camera of rgb_0.png: fx: "):
         read_frames("tum", folder, intrinsics=(-14.0, 14.0, 7.5, 5.5))
+
+
+def test_colmap_depth_bin_errors_name_the_file(tmp_path):
+    from ibr.io.importers.colmap import read_colmap_depth
+
+    good = np.arange(1, 7, dtype=np.float32)
+    (tmp_path / "a.bin").write_bytes(b"3&2&1&" + good.tobytes())
+    np.testing.assert_array_equal(read_colmap_depth(tmp_path / "a.bin"), good.reshape(3, 2, order="F").T)
+    for name, raw in (("cut.bin", b"3&2&1&" + good.tobytes()[:-1]), ("neg.bin", b"-3&-2&1&" + good.tobytes())):
+        (tmp_path / name).write_bytes(raw)
+        with pytest.raises(ValueError, match=rf"^colmap depth: .*{name}: header"):
+            read_colmap_depth(tmp_path / name)  # were numpy's 'buffer size must be a multiple' / 'one unknown dimension'

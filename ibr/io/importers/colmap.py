@@ -93,8 +93,11 @@ def read_colmap_depth(path) -> np.ndarray:
         w, h, c = int(head[0]), int(head[1]), int(head[2])
     except (ValueError, IndexError):
         raise ValueError(f"colmap depth: {path} does not start with 'width&height&channels&'") from None
+    if w < 1 or h < 1 or c != 1 or len(head[3]) % 4:  # numpy's reshape/frombuffer messages named no file
+        raise ValueError(f"colmap depth: {path}: header {w}x{h}x{c} with {len(head[3])} bytes of float32 data; "
+                         "expected a positive width and height, one channel and whole float32 values")
     data = np.frombuffer(head[3], np.float32)
-    if data.size != w * h * c or c != 1:
+    if data.size != w * h * c:
         raise ValueError(f"colmap depth: {path} holds {data.size} values, header says {w}x{h}x{c}")
     z = data.reshape((w, h), order="F").T.copy()
     z[~(z > 0)] = np.nan
