@@ -205,3 +205,14 @@ def test_colmap_depth_bin_errors_name_the_file(tmp_path):
         (tmp_path / name).write_bytes(raw)
         with pytest.raises(ValueError, match=rf"^colmap depth: .*{name}: header"):
             read_colmap_depth(tmp_path / name)  # were numpy's 'buffer size must be a multiple' / 'one unknown dimension'
+
+
+def test_colmap_binary_model_says_how_to_convert_it(tmp_path):
+    from ibr.io.importers import read_frames
+
+    model = tmp_path / "sparse"
+    model.mkdir()
+    (model / "cameras.bin").write_bytes(b"\0" * 8)
+    with pytest.raises(FileNotFoundError, match=r"missing .*cameras\.txt; cameras\.bin is there: a binary model, "
+                                                r"convert it with `colmap model_converter"):
+        read_frames("colmap", model, images=tmp_path)

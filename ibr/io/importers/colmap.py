@@ -30,7 +30,10 @@ MODELS = {"SIMPLE_PINHOLE": 3, "PINHOLE": 4, "OPENCV": 8}
 
 def _lines(path: Path):
     if not path.is_file():
-        raise FileNotFoundError(f"colmap: missing {path}")
+        binary = path.with_suffix(".bin")
+        hint = (f"; {binary.name} is there: a binary model, convert it with `colmap model_converter --input_path "
+                f"{path.parent} --output_path {path.parent} --output_type TXT`" if binary.is_file() else "")
+        raise FileNotFoundError(f"colmap: missing {path}{hint}")
     for n, line in enumerate(path.read_text().splitlines(), 1):
         yield n, line
 
