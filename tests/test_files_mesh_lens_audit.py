@@ -41,3 +41,22 @@ def test_fixed_without_empty_code_refuses_invalid_pixels(tmp_path, encoding):
     back = load_view(tmp_path / "v.json").depth
     assert np.isfinite(back).all()
     assert back[0, 0] == pytest.approx(10.0, rel=1e-6)
+
+
+def test_disparity_png_refuses_non_positive_disparity(tmp_path):
+    # d = B f / z - doffs is negative for z > B f / doffs: a 16-bit PNG wrote those pixels as code 0
+    # (= invalid), so the view came back with (almost) no depth and no error.
+    view = _view(_depth_with_hole())
+    params = {"baseline": 0.2, "focal_px": 12.0, "doffs": 3.0, "scale": 0.01}
+    with pytest.raises(ValueError, match="disparit"):
+        save_view(view, tmp_path / "v.json", depth_name="d.png", depth_encoding="disparity", depth_params=params)
+    assert list(tmp_path.iterdir()) == []
+    # positive disparities still round-trip within half a code
+    params["doffs"] = -3.0
+    save_view(view, tmp_path / "v.json", depth_name="d.png", depth_encoding="disparity", depth_params=params)
+    z = _depth_with_hole()
+    back = load_view(tmp_path / "v.json").depth
+    assert np.array_equal(np.isnan(back), np.isnan(z))
+    half_code = 2.4 / (2.4 / z - 0.005) - z  # depth change of half a disparity code (0.01 / 2) at z
+    ok = np.isfinite(z)
+    assert np.all(np.abs(back[ok] - z[ok]) <= np.abs(half_code[ok]) * 1.01 + 1e-6)

@@ -394,8 +394,17 @@ def save_view(view: View, path, *, color_name: str | None = None, depth_name: st
             if depth_encoding == "fixed24" and Path(depth_name).suffix.lower() == ".png":
                 raise ValueError("depth_name: 24-bit codes do not fit a PNG; use .exr or .tif")
             _check_write_dtype(folder / depth_name, stored, "depth")
-        elif Path(depth_name).suffix.lower() == ".png" and "scale" not in params:
-            raise ValueError(f"depth_params: a 16-bit PNG depth ({depth_name}) needs a 'scale'")
+        elif Path(depth_name).suffix.lower() == ".png":
+            if "scale" not in params:
+                raise ValueError(f"depth_params: a 16-bit PNG depth ({depth_name}) needs a 'scale'")
+            bad = np.isfinite(stored) & (stored <= 0)
+            if bad.any():  # PNG code 0 means "no depth": these pixels would read back as holes
+                raise ValueError(f"depth: {int(bad.sum())} pixel(s) store non-positive {depth_encoding} values "
+                                 f"(down to {float(stored[bad].min()):.6g}; disparities for doffs="
+                                 f"{params.get('doffs')!r}), which a 16-bit PNG ({depth_name}) cannot hold; "
+                                 "use .exr or .pfm" if depth_encoding == "disparity" else
+                                 f"depth: {int(bad.sum())} pixel(s) store non-positive {depth_encoding} values, "
+                                 f"which a 16-bit PNG ({depth_name}) cannot hold; use .exr")
 
     doc = view_to_dict(view, color_name=Path(color_name).as_posix(),
                        depth_name=None if stored is None else Path(depth_name).as_posix(),
