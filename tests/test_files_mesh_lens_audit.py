@@ -60,3 +60,19 @@ def test_disparity_png_refuses_non_positive_disparity(tmp_path):
     half_code = 2.4 / (2.4 / z - 0.005) - z  # depth change of half a disparity code (0.01 / 2) at z
     ok = np.isfinite(z)
     assert np.all(np.abs(back[ok] - z[ok]) <= np.abs(half_code[ok]) * 1.01 + 1e-6)
+
+
+def test_chromatic_predistortion_warps_alpha_like_the_colour():
+    # with three lenses (chromatic aberration) the alpha channel was copied unwarped: outside the
+    # lens the colour went black but stayed opaque, unlike the single-lens path (all channels remapped).
+    from ibr.stereo.lens import RadialDistortion, predistort
+
+    rng = np.random.default_rng(3)
+    img = rng.integers(0, 256, (40, 48, 4)).astype(np.uint8)
+    green = RadialDistortion(0.22, 0.24, 1.5)
+    lenses = (RadialDistortion(0.22 * 1.05, 0.24 * 1.05, 1.5), green, RadialDistortion(0.22 * 0.95, 0.24 * 0.95, 1.5))
+    out = predistort(img, lenses)
+    single = predistort(img, green)
+    assert np.array_equal(out[..., 1], single[..., 1])
+    assert np.array_equal(out[..., 3], single[..., 3])  # alpha follows the green (reference) lens
+    assert out[0, 0, 3] == 0  # outside the lens range: transparent, as the colour is black

@@ -284,7 +284,8 @@ def predistort(image, lens, *, center_px=None, scale_px: float | None = None,
     """Pre-distort (or with ``inverse=True`` undo the pre-distortion of) one eye image.
 
     ``lens`` is one :class:`RadialDistortion` or three (R, G, B) for chromatic aberration: each
-    channel is remapped with its own coefficients so that after the lens the colors line up.
+    channel is remapped with its own coefficients so that after the lens the colors line up
+    (an alpha channel follows the green lens).
     Outside the lens range the output is 0 (black). Keeps the dtype; see :func:`distortion_maps`
     for the pixel convention.
     """
@@ -304,8 +305,11 @@ def predistort(image, lens, *, center_px=None, scale_px: float | None = None,
         mx, my = distortion_maps(w, h, ln, center_px=center_px, scale_px=scale_px,
                                  inverse=inverse, method=method)
         out[..., c] = _remap(np.ascontiguousarray(img[..., c]), mx, my)
-    if img.shape[2] > 3:
-        out[..., 3:] = img[..., 3:]
+    if img.shape[2] > 3:  # alpha (and any further channel) moves with the green, reference lens
+        mx, my = distortion_maps(w, h, lenses[1], center_px=center_px, scale_px=scale_px,
+                                 inverse=inverse, method=method)
+        extra = _remap(np.ascontiguousarray(img[..., 3:]), mx, my)
+        out[..., 3:] = extra.reshape(h, w, -1)
     return out
 
 
