@@ -40,6 +40,10 @@ def load_cameras(path, display):
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"--poses: {p} is not valid JSON ({exc})") from None
+    if isinstance(doc, dict):
+        from ibr.base.validate import check_keys
+
+        check_keys(f"--poses: {p}", doc, ("poses",), required=("poses",))  # "pose": nearest name, never ignored
     items = doc.get("poses") if isinstance(doc, dict) else doc
     if not isinstance(items, list) or not items:
         raise ValueError(f"--poses: expected a non-empty list of poses in {p}")

@@ -76,3 +76,25 @@ def test_chromatic_predistortion_warps_alpha_like_the_colour():
     assert np.array_equal(out[..., 1], single[..., 1])
     assert np.array_equal(out[..., 3], single[..., 3])  # alpha follows the green (reference) lens
     assert out[0, 0, 3] == 0  # outside the lens range: transparent, as the colour is black
+
+
+@pytest.mark.parametrize("doc, message", [
+    ({"pose": "M"}, "unknown key 'pose' (did you mean 'poses'?)"),
+    ({"poses": "M", "extra": 1}, "unknown key 'extra'"),
+])
+def test_timewarp_poses_file_refuses_unknown_keys(tmp_path, capsys, doc, message):
+    # {"pose": [...]} said only "expected a non-empty list"; {"poses": [...], "extra": 1} ran and
+    # ignored the unknown key (e.g. a misspelt "margin"/"camera" setting) without a word.
+    import cli
+
+    cam = Camera(40.0, 40.0, 11.5, 7.5, 24, 16, np.eye(4))
+    view = View(np.full((16, 24, 3), 90, np.uint8), np.full((16, 24), 2.0, np.float32), cam, "v")
+    save_view(view, tmp_path / "v.json")
+    doc = {k: ([np.eye(4).tolist()] if v == "M" else v) for k, v in doc.items()}
+    (tmp_path / "poses.json").write_text(json.dumps(doc))
+    rc = cli.main(["timewarp", str(tmp_path / "v.json"), "--poses", str(tmp_path / "poses.json"),
+                   "-o", str(tmp_path / "frames")])
+    err = capsys.readouterr().err
+    assert rc == 1
+    assert message in err and "--poses" in err and "Traceback" not in err
+    assert not (tmp_path / "frames").exists()
