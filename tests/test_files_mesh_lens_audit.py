@@ -98,3 +98,18 @@ def test_timewarp_poses_file_refuses_unknown_keys(tmp_path, capsys, doc, message
     assert rc == 1
     assert message in err and "--poses" in err and "Traceback" not in err
     assert not (tmp_path / "frames").exists()
+
+
+@pytest.mark.parametrize("far", [100.0, "inf"])
+def test_reversed_z_refuses_depth_outside_near_far(tmp_path, far):
+    # 'reversed' was missing from save_view's [near, far] check: z < near (and z > far) were written
+    # as reversed values outside [0, 1] and came back as holes, silently.
+    z = np.full((8, 10), 5.0, np.float32)
+    z[0, 0] = 0.05
+    with pytest.raises(ValueError, match="outside \\[near, far\\]"):
+        save_view(_view(z), tmp_path / "v.json", depth_encoding="reversed", depth_params={"near": 0.1, "far": far})
+    assert list(tmp_path.iterdir()) == []
+    z[0, 0] = 0.1  # the near plane itself is fine
+    save_view(_view(z), tmp_path / "v.json", depth_encoding="reversed", depth_params={"near": 0.1, "far": far})
+    back = load_view(tmp_path / "v.json").depth
+    assert np.allclose(back, z, rtol=1e-6)

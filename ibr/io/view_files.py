@@ -146,7 +146,7 @@ def _encode_depth(z: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.n
         return _depth.disparity_from_z(z, baseline=p["baseline"], focal_px=p["focal_px"], doffs=p["doffs"])
     nf = {"near": p["near"], "far": p["far"]}
     valid = _depth.valid_mask(z)
-    if encoding in _FIXED_BITS or encoding in ("window", "zprime"):
+    if encoding in _FIXED_BITS or encoding in ("window", "reversed", "zprime"):
         with np.errstate(invalid="ignore"):
             outside = valid & ((z < nf["near"]) | (z > nf["far"]))
         if outside.any():
