@@ -113,3 +113,25 @@ def test_reversed_z_refuses_depth_outside_near_far(tmp_path, far):
     save_view(_view(z), tmp_path / "v.json", depth_encoding="reversed", depth_params={"near": 0.1, "far": far})
     back = load_view(tmp_path / "v.json").depth
     assert np.allclose(back, z, rtol=1e-6)
+
+
+@pytest.mark.parametrize("encoding, top", [("window", 1.0), ("reversed", 1.0), ("zprime", 2.0**24)])
+def test_window_like_files_refuse_values_outside_their_range(tmp_path, encoding, top):
+    # a planar-z file declared as 'window' (values 2..9) loaded as a view with no depth at all
+    # (every value outside [0, 1] became NaN), without an error.
+    from ibr.io import write_depth
+
+    z = _depth_with_hole()
+    save_view(_view(z), tmp_path / "v.json")
+    doc = json.loads((tmp_path / "v.json").read_text())
+    stored = np.where(np.isnan(z), np.nan, 0.5 * top)
+    stored[3, 4] = 1.5 * top
+    write_depth(tmp_path / "w.exr", stored)
+    doc["depth"] = {"path": "w.exr", "encoding": encoding, "near": 0.5, "far": 10.0}
+    (tmp_path / "v.json").write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match="'depth.path'.*w.exr.*outside"):
+        load_view(tmp_path / "v.json")
+    stored[3, 4] = top  # the range's end is valid
+    write_depth(tmp_path / "w.exr", stored)
+    back = load_view(tmp_path / "v.json").depth
+    assert np.isnan(back[0, 0]) and np.isfinite(back[1:]).all()

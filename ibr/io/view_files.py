@@ -55,6 +55,8 @@ DEPTH_ENCODINGS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 }
 
 _FIXED_BITS = {"fixed16": 16, "fixed24": 24}
+#: Stored range of the window-like encodings: [0, top]; anything else is not such a buffer.
+_WINDOW_RANGES = {"window": 1.0, "reversed": 1.0, "zprime": _depth.ZPRIME_SCALE}
 
 #: Top-level keys of a view file (anything else is refused, with the nearest valid name).
 VIEW_KEYS = ("format", "version", "name", "color", "depth", "camera")
@@ -260,6 +262,14 @@ def load_view(path) -> View:
         if not depth_path.is_file():
             raise FileNotFoundError(f"{where}: 'depth.path' refers to {_not_a_file(depth_path)}")
         stored = _read_stored_depth(depth_path, encoding, p, f"{where}: 'depth.path'", channel)
+        top = _WINDOW_RANGES.get(encoding)
+        if top is not None:  # a value outside would silently become a hole (a planar-z file, e.g.)
+            with np.errstate(invalid="ignore"):
+                out = np.isfinite(stored) & ((stored < 0) | (stored > top))
+            if out.any():
+                raise ValueError(f"{where}: 'depth.path' {depth_path.name}: {int(out.sum())} value(s) outside "
+                                 f"[0, {top:g}] for encoding {encoding!r} (range {float(np.nanmin(stored)):.6g}.."
+                                 f"{float(np.nanmax(stored[np.isfinite(stored)])):.6g}); is the encoding right?")
         if stored.shape != color.shape[:2]:
             raise ValueError(f"{where}: depth {depth_path.name} is {stored.shape[1]}x{stored.shape[0]} but color "
                              f"{color_path.name} is {color.shape[1]}x{color.shape[0]}")
