@@ -135,3 +135,19 @@ def test_window_like_files_refuse_values_outside_their_range(tmp_path, encoding,
     write_depth(tmp_path / "w.exr", stored)
     back = load_view(tmp_path / "v.json").depth
     assert np.isnan(back[0, 0]) and np.isfinite(back[1:]).all()
+
+
+@pytest.mark.parametrize("key", ["color", "depth"])
+def test_corrupt_pfm_in_a_view_file_names_the_key(tmp_path, key):
+    # a truncated PFM said only "p.pfm: truncated PFM file ...": not which view file or key
+    z = _depth_with_hole()
+    save_view(_view(z), tmp_path / "v.json")
+    doc = json.loads((tmp_path / "v.json").read_text())
+    (tmp_path / "p.pfm").write_bytes(b"Pf\n10 8\n-1\n" + b"\0" * 100)
+    if key == "color":
+        doc["color"] = "p.pfm"
+    else:
+        doc["depth"]["path"] = "p.pfm"
+    (tmp_path / "v.json").write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match=f"v.json: '{key}(.path)?'.*p.pfm: truncated PFM"):
+        load_view(tmp_path / "v.json")

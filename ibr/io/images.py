@@ -192,7 +192,7 @@ def read_image(path, *, what: str = "image") -> np.ndarray:
     path = Path(path)
     _require_file(path, what)
     if path.suffix.lower() == ".pfm":
-        return read_pfm(path)[0]
+        return _read_pfm_named(path, what)
     oiio = _oiio()
     config = oiio.ImageSpec()
     config.attribute("oiio:UnassociatedAlpha", 1)  # return RGBA as stored, not premultiplied
@@ -217,6 +217,14 @@ def read_image(path, *, what: str = "image") -> np.ndarray:
     if pixels.ndim == 3 and pixels.shape[2] == 1:
         pixels = pixels[..., 0]
     return np.ascontiguousarray(pixels)
+
+
+def _read_pfm_named(path: Path, what: str) -> np.ndarray:
+    """:func:`read_pfm`'s pixels; a bad file's message starts with ``what`` (e.g. the view file's key)."""
+    try:
+        return read_pfm(path)[0]
+    except ValueError as exc:
+        raise ValueError(f"{what}: {exc}") from None
 
 
 def _one_line(message) -> str:
@@ -298,7 +306,7 @@ def depth_channel_names(path, *, what: str = "depth") -> list[str]:
     path = Path(path)
     _require_file(path, what)
     if path.suffix.lower() == ".pfm":
-        return ["Y"] if read_pfm(path)[0].ndim == 2 else ["R", "G", "B"]
+        return ["Y"] if _read_pfm_named(path, what).ndim == 2 else ["R", "G", "B"]
     oiio = _oiio()
     inp = oiio.ImageInput.open(str(path))
     if inp is None:
