@@ -44,6 +44,8 @@ def run(args) -> int:
 
     if args.centers is not None and not args.sbs:
         raise ValueError("--centers: only with --sbs (use --center for one image)")
+    if args.center is not None and args.sbs:  # was silently ignored: each eye used its image centre
+        raise ValueError("--center: not with --sbs (give each eye's lens centre with --centers UL VL UR VR)")
     with OutputPlan("ibr distort", log=info) as plan:
         plan.add_input("IMAGE", args.image)
         out = plan.add_file("-o", args.out, IMAGE_EXTS)
@@ -54,6 +56,16 @@ def run(args) -> int:
             lens = (RadialDistortion(args.c1 * kr, args.c2 * kr, args.r_max), lens,
                     RadialDistortion(args.c1 * kb, args.c2 * kb, args.r_max))
         img = read_image(args.image)
+        from ibr.stereo.lens import _check_center
+
+        if args.center is not None or args.centers is not None:  # the option's name, not 'center_px'
+            eye_w = img.shape[1] // 2 if args.sbs else img.shape[1]
+            for c in ([args.center] if args.center is not None else [args.centers[:2], args.centers[2:]]):
+                try:
+                    _check_center(c, eye_w, img.shape[0])
+                except ValueError as exc:
+                    raise ValueError(f"{'--centers' if args.sbs else '--center'}: "
+                                     f"{str(exc).split(': ', 1)[1]}") from None
         if args.sbs:
             w = img.shape[1]
             if w % 2:

@@ -410,7 +410,7 @@ _add("warp on all-NaN depth", C, "error", r"depth: no valid pixel", argv=("warp"
 _add("warp --method unknown", U, "usage", r"argument --method: invalid choice", argv=("warp", "{d}/a.json", "--to", "{d}/b.json",
      "-o", "{d}/o.png", "--method", "magic"))
 _add("warp without --to", U, "usage", r"the following arguments are required: --to", argv=("warp", "{d}/a.json", "-o", "{d}/o.png"))
-_add("distort --center 5000 5000", C, "error", r"center_px: expected a lens centre inside the image",
+_add("distort --center 5000 5000", C, "error", r"--center: expected a lens centre inside the image",
      argv=("distort", "{d}/img.png", "--c1", "0.2", "--center", "5000", "5000", "-o", "{d}/o.png"), issue=True)
 _add("distort --center nan 0", U, "usage", r"argument --center: expected a finite number", argv=("distort", "{d}/img.png",
      "--c1", "0.2", "--center", "nan", "0", "-o", "{d}/o.png"))

@@ -151,3 +151,31 @@ def test_corrupt_pfm_in_a_view_file_names_the_key(tmp_path, key):
     (tmp_path / "v.json").write_text(json.dumps(doc))
     with pytest.raises(ValueError, match=f"v.json: '{key}(.path)?'.*p.pfm: truncated PFM"):
         load_view(tmp_path / "v.json")
+
+
+@pytest.mark.parametrize("extra, option", [(["--center", "1000", "10"], "--center"),
+                                           (["--sbs", "--centers", "0", "0", "600", "0"], "--centers")])
+def test_distort_lens_centre_outside_names_the_option(tmp_path, capsys, extra, option):
+    # the error named the library argument 'center_px', not the option the user typed
+    import cli
+    from ibr.io import write_image
+
+    write_image(tmp_path / "in.png", np.zeros((16, 24, 3), np.uint8))
+    rc = cli.main(["distort", str(tmp_path / "in.png"), "--c1", "0.2", *extra, "-o", str(tmp_path / "out.png")])
+    err = capsys.readouterr().err
+    assert rc == 1
+    assert f"error: {option}: expected a lens centre inside the image" in err
+    assert not (tmp_path / "out.png").exists()
+
+
+def test_distort_center_with_sbs_is_refused_not_ignored(tmp_path, capsys):
+    # --sbs used each eye's image centre and dropped --center without a word
+    import cli
+    from ibr.io import write_image
+
+    write_image(tmp_path / "in.png", np.zeros((16, 24, 3), np.uint8))
+    rc = cli.main(["distort", str(tmp_path / "in.png"), "--c1", "0.2", "--sbs", "--center", "3", "4",
+                   "-o", str(tmp_path / "out.png")])
+    assert rc == 1
+    assert "error: --center: not with --sbs" in capsys.readouterr().err
+    assert not (tmp_path / "out.png").exists()
