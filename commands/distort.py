@@ -39,6 +39,7 @@ def run(args) -> int:
 
     from commands._common import info
     from ibr.io import read_image, write_image
+    from ibr.io.images import check_write_dtype
     from ibr.io.outputs import IMAGE_EXTS, OutputPlan
     from ibr.stereo.lens import RadialDistortion, predistort, predistort_stereo
 
@@ -56,6 +57,7 @@ def run(args) -> int:
             lens = (RadialDistortion(args.c1 * kr, args.c2 * kr, args.r_max), lens,
                     RadialDistortion(args.c1 * kb, args.c2 * kb, args.r_max))
         img = read_image(args.image)
+        check_write_dtype("-o", out, img.dtype)  # the output keeps the dtype: refused before the work
         from ibr.stereo.lens import _check_center
 
         if args.center is not None or args.centers is not None:  # the option's name, not 'center_px'

@@ -179,3 +179,17 @@ def test_distort_center_with_sbs_is_refused_not_ignored(tmp_path, capsys):
     assert rc == 1
     assert "error: --center: not with --sbs" in capsys.readouterr().err
     assert not (tmp_path / "out.png").exists()
+
+
+def test_distort_refuses_an_output_type_the_image_cannot_be_written_as_before_the_work(tmp_path, capsys):
+    """A float EXR image with ``-o out.png`` was remapped first and then refused naming 'array'."""
+    import cli
+    from ibr.io import write_image
+
+    src = tmp_path / "in.exr"
+    write_image(src, np.full((12, 16, 3), 0.5, np.float32))
+    assert cli.main(["distort", str(src), "-o", str(tmp_path / "out.png"), "--c1", "0.2"]) == 1
+    err = capsys.readouterr().err
+    assert "error: -o: a .png file stores" in err and "got float32" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.exr"]
+    assert cli.main(["distort", str(src), "-o", str(tmp_path / "out.exr"), "--c1", "0.2"]) == 0

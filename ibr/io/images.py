@@ -38,6 +38,7 @@ from ..base.validate import check_choice, check_image, check_image_size, nearest
 __all__ = [
     "DEPTH_CHANNEL_NAMES",
     "atomic_path",
+    "check_write_dtype",
     "depth_channel_names",
     "read_depth",
     "read_image",
@@ -230,6 +231,12 @@ def _read_pfm_named(path: Path, what: str) -> np.ndarray:
 def _one_line(message) -> str:
     """OpenImageIO's error text on one line (a corrupt PNG gave three, #12: errors are one line)."""
     return " ".join(str(message or "").split())
+
+
+def check_write_dtype(name: str, path, dtype) -> None:
+    """Refuse (ValueError naming ``name``) writing pixels of ``dtype`` to ``path``'s format (e.g.
+    uint8 into an EXR): what :func:`write_image` would refuse, checked before a command's work."""
+    _check_write_dtype(Path(path), np.empty(0, dtype), name)
 
 
 def _check_write_dtype(path: Path, arr: np.ndarray, name: str) -> str:
