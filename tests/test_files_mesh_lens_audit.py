@@ -193,3 +193,37 @@ def test_distort_refuses_an_output_type_the_image_cannot_be_written_as_before_th
     assert "error: -o: a .png file stores" in err and "got float32" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.exr"]
     assert cli.main(["distort", str(src), "-o", str(tmp_path / "out.exr"), "--c1", "0.2"]) == 0
+
+
+@pytest.mark.parametrize("encoding, cleared", [("window", 1.0), ("reversed", 0.0), ("zprime", 2.0**24)])
+def test_window_like_depth_files_can_say_the_far_value_is_empty(tmp_path, encoding, cleared):
+    """A cleared depth buffer (window 1, reversed 0, z' 2^24) loaded as a wall at the far plane:
+    fixed16/24 had ``far_is_empty``, the float encodings had nothing. Opt-in now (the default
+    keeps the far plane, as :func:`ibr.base.depth.z_from_window` documents)."""
+    from ibr.io import write_depth
+
+    cam = Camera.from_fov(4, 3, hfov_deg=60)
+    z = np.full((3, 4), 2.0, np.float32)
+    save_view(View(np.zeros((3, 4, 3), np.uint8), z, cam, "v"), tmp_path / "v.json", depth_name="v_depth.exr",
+              depth_encoding=encoding, depth_params={"near": 0.5, "far": 10.0})
+    doc = json.loads((tmp_path / "v.json").read_text())
+    from ibr.io import read_depth
+
+    stored = read_depth(tmp_path / "v_depth.exr")
+    stored[0, 0] = cleared  # the pixel the renderer never drew
+    write_depth(tmp_path / "v_depth.exr", stored.astype(np.float32))
+    assert load_view(tmp_path / "v.json").depth[0, 0] == pytest.approx(10.0, rel=1e-4)  # default: the far plane
+    doc["depth"]["far_is_empty"] = True
+    (tmp_path / "v.json").write_text(json.dumps(doc))
+    d = load_view(tmp_path / "v.json").depth
+    assert np.isnan(d[0, 0]) and np.allclose(d[1:], 2.0, rtol=1e-5)
+    # saving with far_is_empty: holes round-trip, a valid pixel at the far plane is refused
+    z2 = z.copy()
+    z2[0, 0] = np.nan
+    save_view(View(np.zeros((3, 4, 3), np.uint8), z2, cam, "w"), tmp_path / "w.json", depth_name="w_depth.exr",
+              depth_encoding=encoding, depth_params={"near": 0.5, "far": 10.0, "far_is_empty": True})
+    assert np.isnan(load_view(tmp_path / "w.json").depth[0, 0])
+    z2[0, 0] = 10.0
+    with pytest.raises(ValueError, match=r"valid pixels lie at the far plane, whose \w+ value reads back as empty"):
+        save_view(View(np.zeros((3, 4, 3), np.uint8), z2, cam, "u"), tmp_path / "u.json", depth_name="u_depth.exr",
+                  depth_encoding=encoding, depth_params={"near": 0.5, "far": 10.0, "far_is_empty": True})

@@ -47,9 +47,9 @@ DEPTH_ENCODINGS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "z": ((), ("scale", "step")),
     "range": ((), ("scale", "step")),
     "disparity": (("baseline", "focal_px", "doffs"), ("scale", "step")),
-    "window": (("near", "far"), ()),
-    "reversed": (("near", "far"), ()),
-    "zprime": (("near", "far"), ()),
+    "window": (("near", "far"), ("far_is_empty",)),
+    "reversed": (("near", "far"), ("far_is_empty",)),
+    "zprime": (("near", "far"), ("far_is_empty",)),
     "fixed16": (("near", "far"), ("far_is_empty",)),
     "fixed24": (("near", "far"), ("far_is_empty",)),
 }
@@ -128,12 +128,12 @@ def _decode_depth(stored: np.ndarray, encoding: str, p: dict, camera: Camera) ->
     if encoding == "disparity":
         return _depth.z_from_disparity(stored, baseline=p["baseline"], focal_px=p["focal_px"], doffs=p["doffs"])
     nf = {"near": p["near"], "far": p["far"]}
-    if encoding == "window":
-        return _depth.z_from_window(stored, **nf)
-    if encoding == "reversed":
-        return _depth.z_from_reversed(stored, **nf)
-    if encoding == "zprime":
-        return _depth.z_from_zprime(stored, **nf)
+    if encoding in _WINDOW_RANGES:
+        z = {"window": _depth.z_from_window, "reversed": _depth.z_from_reversed,
+             "zprime": _depth.z_from_zprime}[encoding](stored, **nf)
+        if p.get("far_is_empty", False):  # opt-in: a cleared buffer's far value is no depth, not a wall
+            z[_at_far(stored, encoding)] = np.nan
+        return z
     bits = _FIXED_BITS[encoding]
     return _depth.z_from_fixed(stored, bits=bits, far_is_empty=p.get("far_is_empty", True), **nf)
 
@@ -154,12 +154,15 @@ def _encode_depth(z: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.n
         if outside.any():
             raise ValueError(f"depth: {int(outside.sum())} valid pixel(s) lie outside [near, far] = "
                              f"[{nf['near']}, {nf['far']}] and cannot be stored as {encoding!r}")
-    if encoding == "window":
-        return _depth.window_from_z(z, **nf).astype(np.float32)
-    if encoding == "reversed":
-        return _depth.reversed_from_z(z, **nf).astype(np.float32)
-    if encoding == "zprime":
-        return _depth.zprime_from_z(z, **nf).astype(np.float32)
+    if encoding in _WINDOW_RANGES:
+        stored = {"window": _depth.window_from_z, "reversed": _depth.reversed_from_z,
+                  "zprime": _depth.zprime_from_z}[encoding](z, **nf).astype(np.float32)
+        with np.errstate(invalid="ignore"):  # at the far plane (to float precision) or stored as its value
+            at_far = valid & (_at_far(stored, encoding) | (z >= nf["far"] * (1 - 1e-6)))
+        if p.get("far_is_empty", False) and np.any(at_far):
+            raise ValueError(f"depth: valid pixels lie at the far plane, whose {encoding} value reads back as "
+                             "empty with far_is_empty=true; move far out or set far_is_empty=false")
+        return stored
     bits = _FIXED_BITS[encoding]
     if not p.get("far_is_empty", True) and not valid.all():
         raise ValueError(f"depth: {int((~valid).sum())} pixel(s) have no depth, but with far_is_empty=false every "
@@ -170,6 +173,11 @@ def _encode_depth(z: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.n
         raise ValueError(f"depth: valid pixels quantize to the far code of a {bits}-bit buffer, which "
                          f"reads back as empty; move far out or set far_is_empty=false")
     return q
+
+
+def _at_far(stored: np.ndarray, encoding: str) -> np.ndarray:
+    """Where a window-like buffer holds its far (cleared) value: window 1, reversed 0, zprime 2^24."""
+    return stored <= 0 if encoding == "reversed" else stored >= _WINDOW_RANGES[encoding]
 
 
 def _read_stored_depth(path: Path, encoding: str, p: dict, where: str, channel: str | None = None) -> np.ndarray:
