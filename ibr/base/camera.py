@@ -57,7 +57,6 @@ def _check_pose(name: str, pose) -> np.ndarray:
     return m
 
 
-
 def _check_side(name: str, value) -> int:
     """An image side in pixels: an integer >= 1 (an integral float is taken), or ValueError naming ``name``."""
     if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating))

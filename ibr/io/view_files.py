@@ -57,6 +57,9 @@ DEPTH_ENCODINGS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 _FIXED_BITS = {"fixed16": 16, "fixed24": 24}
 #: Stored range of the window-like encodings: [0, top]; anything else is not such a buffer.
 _WINDOW_RANGES = {"window": 1.0, "reversed": 1.0, "zprime": _depth.ZPRIME_SCALE}
+#: Their decoders (stored -> planar z) and encoders (planar z -> stored), near/far as keywords.
+_WINDOW_DECODE = {"window": _depth.z_from_window, "reversed": _depth.z_from_reversed, "zprime": _depth.z_from_zprime}
+_WINDOW_ENCODE = {"window": _depth.window_from_z, "reversed": _depth.reversed_from_z, "zprime": _depth.zprime_from_z}
 
 #: Top-level keys of a view file (anything else is refused, with the nearest valid name).
 VIEW_KEYS = ("format", "version", "name", "color", "depth", "camera")
@@ -129,8 +132,7 @@ def _decode_depth(stored: np.ndarray, encoding: str, p: dict, camera: Camera) ->
         return _depth.z_from_disparity(stored, baseline=p["baseline"], focal_px=p["focal_px"], doffs=p["doffs"])
     nf = {"near": p["near"], "far": p["far"]}
     if encoding in _WINDOW_RANGES:
-        z = {"window": _depth.z_from_window, "reversed": _depth.z_from_reversed,
-             "zprime": _depth.z_from_zprime}[encoding](stored, **nf)
+        z = _WINDOW_DECODE[encoding](stored, **nf)
         if p.get("far_is_empty", False):  # opt-in: a cleared buffer's far value is no depth, not a wall
             z[_at_far(stored, encoding)] = np.nan
         return z
@@ -148,15 +150,14 @@ def _encode_depth(z: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.n
         return _depth.disparity_from_z(z, baseline=p["baseline"], focal_px=p["focal_px"], doffs=p["doffs"])
     nf = {"near": p["near"], "far": p["far"]}
     valid = _depth.valid_mask(z)
-    if encoding in _FIXED_BITS or encoding in ("window", "reversed", "zprime"):
+    if encoding in _FIXED_BITS or encoding in _WINDOW_RANGES:
         with np.errstate(invalid="ignore"):
             outside = valid & ((z < nf["near"]) | (z > nf["far"]))
         if outside.any():
             raise ValueError(f"depth: {int(outside.sum())} valid pixel(s) lie outside [near, far] = "
                              f"[{nf['near']}, {nf['far']}] and cannot be stored as {encoding!r}")
     if encoding in _WINDOW_RANGES:
-        stored = {"window": _depth.window_from_z, "reversed": _depth.reversed_from_z,
-                  "zprime": _depth.zprime_from_z}[encoding](z, **nf).astype(np.float32)
+        stored = _WINDOW_ENCODE[encoding](z, **nf).astype(np.float32)
         with np.errstate(invalid="ignore"):  # at the far plane (to float precision) or stored as its value
             at_far = valid & (_at_far(stored, encoding) | (z >= nf["far"] * (1 - 1e-6)))
         if p.get("far_is_empty", False) and np.any(at_far):
@@ -195,10 +196,10 @@ def _json_number(x: float):
     return "inf" if isinstance(x, float) and math.isinf(x) else x
 
 
-
 def _not_a_file(path: Path) -> str:
     """How a view file's reference that is no file is described: a folder or a missing file."""
     return f"a folder, not an image file: {path}" if path.is_dir() else f"a missing file {path}"
+
 
 def load_view(path) -> View:
     """Load a view file (JSON sidecar + color + optional depth) as a :class:`~ibr.base.view.View`.
@@ -417,12 +418,10 @@ def save_view(view: View, path, *, color_name: str | None = None, depth_name: st
                 raise ValueError(f"depth_params: a 16-bit PNG depth ({depth_name}) needs a 'scale'")
             bad = np.isfinite(stored) & (stored <= 0)
             if bad.any():  # PNG code 0 means "no depth": these pixels would read back as holes
+                why = f" for doffs={params.get('doffs')!r}" if depth_encoding == "disparity" else ""
                 raise ValueError(f"depth: {int(bad.sum())} pixel(s) store non-positive {depth_encoding} values "
-                                 f"(down to {float(stored[bad].min()):.6g}; disparities for doffs="
-                                 f"{params.get('doffs')!r}), which a 16-bit PNG ({depth_name}) cannot hold; "
-                                 "use .exr or .pfm" if depth_encoding == "disparity" else
-                                 f"depth: {int(bad.sum())} pixel(s) store non-positive {depth_encoding} values, "
-                                 f"which a 16-bit PNG ({depth_name}) cannot hold; use .exr")
+                                 f"(down to {float(stored[bad].min()):.6g}{why}), which a 16-bit PNG "
+                                 f"({depth_name}) cannot hold; use .exr or .pfm")
 
     doc = view_to_dict(view, color_name=Path(color_name).as_posix(),
                        depth_name=None if stored is None else Path(depth_name).as_posix(),
