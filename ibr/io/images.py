@@ -233,19 +233,17 @@ def _one_line(message) -> str:
     return " ".join(str(message or "").split())
 
 
-def check_write_dtype(name: str, path, dtype) -> None:
+def check_write_dtype(name: str, path, dtype) -> str:
     """Refuse (ValueError naming ``name``) writing pixels of ``dtype`` to ``path``'s format (e.g.
-    uint8 into an EXR): what :func:`write_image` would refuse, checked before a command's work."""
-    _check_write_dtype(Path(path), np.empty(0, dtype), name)
-
-
-def _check_write_dtype(path: Path, arr: np.ndarray, name: str) -> str:
+    uint8 into an EXR): what :func:`write_image` refuses, for a command to check before its work.
+    Returns the lower-case extension."""
+    path, dtype = Path(path), np.dtype(dtype)
     ext = path.suffix.lower()
     if ext not in _WRITE_DTYPES:
         raise ValueError(f"{name}: unsupported extension {ext!r} for {path}; expected one of "
                          f"{', '.join(_WRITE_DTYPES)}")
-    if arr.dtype.name not in _WRITE_DTYPES[ext]:
-        raise ValueError(f"{name}: a {ext} file stores {' or '.join(_WRITE_DTYPES[ext])}, got {arr.dtype} "
+    if dtype.name not in _WRITE_DTYPES[ext]:
+        raise ValueError(f"{name}: a {ext} file stores {' or '.join(_WRITE_DTYPES[ext])}, got {dtype} "
                          f"(convert the array or choose another extension)")
     return ext
 
@@ -265,7 +263,7 @@ def write_image(path, array) -> None:
     """
     path = Path(path)
     arr = check_image("array", array)
-    ext = _check_write_dtype(path, arr, "array")
+    ext = check_write_dtype("array", path, arr.dtype)
     if ext == ".pfm":
         write_pfm(path, arr)
         return

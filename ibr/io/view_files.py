@@ -30,7 +30,8 @@ from ..base import depth as _depth
 from ..base.camera import Camera
 from ..base.validate import check_keys, check_relative_path, nearest_name
 from ..base.view import View
-from .images import _check_write_dtype, _depth_array, _require_file, atomic_path, read_depth, read_image, write_depth, write_image
+from .images import (_depth_array, _require_file, atomic_path, check_write_dtype, read_depth, read_image, write_depth,
+                     write_image)
 
 __all__ = ["DEPTH_ENCODINGS", "VIEW_FORMAT", "VIEW_KEYS", "VIEW_VERSION", "load_camera", "load_view", "save_view",
            "view_to_dict"]
@@ -405,14 +406,14 @@ def save_view(view: View, path, *, color_name: str | None = None, depth_name: st
     color = view.color
     if color.dtype == np.float64:
         color = color.astype(np.float32)
-    _check_write_dtype(folder / color_name, color, "color")
+    check_write_dtype("color", folder / color_name, color.dtype)
     stored = None
     if view.depth is not None:
         stored = _encode_depth(view.depth, depth_encoding, params, view.camera)
         if depth_encoding in _FIXED_BITS:
             if depth_encoding == "fixed24" and Path(depth_name).suffix.lower() == ".png":
                 raise ValueError("depth_name: 24-bit codes do not fit a PNG; use .exr or .tif")
-            _check_write_dtype(folder / depth_name, stored, "depth")
+            check_write_dtype("depth", folder / depth_name, stored.dtype)
         elif Path(depth_name).suffix.lower() == ".png":
             if "scale" not in params:
                 raise ValueError(f"depth_params: a 16-bit PNG depth ({depth_name}) needs a 'scale'")
