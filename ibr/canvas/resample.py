@@ -80,6 +80,12 @@ def _scale_of(dtype: np.dtype) -> float:
     return {"uint8": 255.0, "uint16": 65535.0}.get(np.dtype(dtype).name, 1.0)
 
 
+def _check_pixel_dtype(img: np.ndarray) -> None:
+    """A canvas image holds uint8, uint16 or float pixels (ValueError naming ``image``)."""
+    if img.dtype.kind != "f" and img.dtype not in (np.uint8, np.uint16):
+        raise ValueError(f"image: expected uint8, uint16 or float pixels, got {img.dtype}")
+
+
 def image_to_rgba(image, dtype=np.uint8) -> np.ndarray:
     """(H, W, 4) straight-alpha RGBA of ``dtype`` from a gray, gray+alpha, RGB or RGBA image.
 
@@ -94,8 +100,8 @@ def image_to_rgba(image, dtype=np.uint8) -> np.ndarray:
         if lo < -1e-6 or hi > 1 + 1e-6:  # float64 was clipped on conversion, float32 kept as is: neither (#12)
             raise ValueError(f"image: float pixels must lie in [0, 1] (1.0 = white), got values in [{lo:g}, {hi:g}]; "
                              "scale the image (e.g. / 255) or pass uint8/uint16")
-    elif img.dtype not in (np.uint8, np.uint16):
-        raise ValueError(f"image: expected uint8, uint16 or float pixels, got {img.dtype}")
+    else:
+        _check_pixel_dtype(img)
     if img.ndim == 2:
         img = img[..., None]
     c = img.shape[2]
@@ -127,8 +133,7 @@ def set_image(canvas: Canvas, image) -> None:
     if not isinstance(canvas, Canvas):
         raise TypeError(f"canvas: expected a Canvas, got {type(canvas).__name__}")
     img = check_image("image", image, channels=(1, 2, 3, 4))
-    if img.dtype.kind != "f" and img.dtype not in (np.uint8, np.uint16):  # before resample() makes it float32
-        raise ValueError(f"image: expected uint8, uint16 or float pixels, got {img.dtype}")
+    _check_pixel_dtype(img)  # before resample() makes an int64 image float32
     w, h = canvas.resolution
     if img.shape[:2] != (h, w):
         img = resample(img, (w, h))

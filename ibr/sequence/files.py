@@ -124,6 +124,11 @@ def _numbered_views(folder: Path) -> tuple[list[Path], str]:
     return [p for _, p in items], prefix
 
 
+def _is_frame_rate(fps) -> bool:
+    """A positive finite number of frames per second (not a bool)."""
+    return not isinstance(fps, bool) and isinstance(fps, (int, float)) and 0 < fps < math.inf
+
+
 def load_sequence(path) -> Sequence:
     """Read a sequence manifest or a folder of numbered view files (see the module docstring).
 
@@ -159,7 +164,7 @@ def load_sequence(path) -> Sequence:
         if not v.is_file():
             raise FileNotFoundError(f"{where}: 'views[{i}]' refers to a missing file {v}")
     fps = doc.get("fps")
-    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float)) or not 0 < fps < math.inf):
+    if fps is not None and not _is_frame_rate(fps):
         raise ValueError(f"{where}: 'fps' must be a positive finite number, got {fps!r}")
     truth = factor = None
     gt = doc.get("ground_truth")
@@ -211,7 +216,7 @@ def save_sequence(views: Iterable[View], manifest, *, name: str | None = None, f
     if not manifest.parent.is_dir():
         raise FileNotFoundError(f"manifest: output folder {manifest.parent} does not exist")
     # checked before any view is written (a NaN fps failed in json.dumps after every view file)
-    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float)) or not 0 < fps < math.inf):
+    if fps is not None and not _is_frame_rate(fps):
         raise ValueError(f"fps: expected a positive finite frame rate, got {fps!r}")
     if name is not None and not isinstance(name, str):
         raise TypeError(f"name: expected a string, got {type(name).__name__}")
