@@ -63,11 +63,7 @@ def run(args) -> int:
         if args.center is not None or args.centers is not None:  # the option's name, not 'center_px'
             eye_w = img.shape[1] // 2 if args.sbs else img.shape[1]
             for c in ([args.center] if args.center is not None else [args.centers[:2], args.centers[2:]]):
-                try:
-                    _check_center(c, eye_w, img.shape[0])
-                except ValueError as exc:
-                    raise ValueError(f"{'--centers' if args.sbs else '--center'}: "
-                                     f"{str(exc).split(': ', 1)[1]}") from None
+                _check_center(c, eye_w, img.shape[0], name="--centers" if args.sbs else "--center")
         if args.sbs:
             w = img.shape[1]
             if w % 2:

@@ -203,13 +203,13 @@ def _lenses(lens) -> tuple[RadialDistortion, ...]:
                     f"for chromatic aberration), got {type(lens).__name__}")
 
 
-def _check_center(center_px, width: int, height: int) -> tuple[float, float]:
+def _check_center(center_px, width: int, height: int, name: str = "center_px") -> tuple[float, float]:
     """The lens centre as floats, inside the image span [-0.5, W - 0.5] x [-0.5, H - 0.5] (#12:
-    a centre far outside gives an all-black picture)."""
-    c = check_array("center_px", center_px, shape=(2,), dtype_kind="fiu").astype(np.float64)
+    a centre far outside gives an all-black picture); errors name ``name``."""
+    c = check_array(name, center_px, shape=(2,), dtype_kind="fiu").astype(np.float64)
     u, v = float(c[0]), float(c[1])
     if not (np.isfinite(c).all() and -0.5 <= u <= width - 0.5 and -0.5 <= v <= height - 0.5):
-        raise ValueError(f"center_px: expected a lens centre inside the image, u in [-0.5, {width - 0.5:g}] and "
+        raise ValueError(f"{name}: expected a lens centre inside the image, u in [-0.5, {width - 0.5:g}] and "
                          f"v in [-0.5, {height - 0.5:g}] (pixel centres at integers), got ({u:g}, {v:g})")
     return u, v
 
