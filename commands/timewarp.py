@@ -73,7 +73,7 @@ def run(args) -> int:
     from commands.stereo import display_image
     from ibr.io import load_view, write_image
     from ibr.io.outputs import OutputPlan
-    from ibr.stereo.timewarp import timewarp
+    from ibr.stereo.timewarp import timewarp, timewarp_mode
 
     with OutputPlan("ibr timewarp", log=info) as plan:
         plan.add_view_input("VIEW", args.view)
@@ -87,6 +87,11 @@ def run(args) -> int:
             raise ValueError(f"--margin: expected 0 <= margin < half the view size, got {m}")
         display = replace(cam, cx=cam.cx - m, cy=cam.cy - m, width=cam.width - 2 * m, height=cam.height - 2 * m)
         cams = load_cameras(args.poses, display)
+        moved = [i for i, c in enumerate(cams) if timewarp_mode(view.camera, c, mode=args.mode) == "depth"]
+        if moved and view.depth is None:  # found before any frame is warped, not at the first moved pose
+            raise ValueError(f"VIEW: {args.view} has no depth, but pose {moved[0]} of --poses "
+                             + ("moves the head (a depth warp); give a view with depth or --mode rotation"
+                                if args.mode == "auto" else "needs it (--mode depth)"))
         for i, c in progress(enumerate(cams), len(cams), "timewarp"):
             fr = timewarp(view, c, mode=args.mode)
             path = plan.stage(out, f"frame_{i:04d}.png")

@@ -172,3 +172,32 @@ def test_cli_timewarp(tmp_path):
     assert main(["timewarp", str(src), "--poses", str(tmp_path / "bad.json"), "-o", str(out)]) == 1
     assert main(["timewarp", str(src), "--poses", str(tmp_path / "none.json"), "-o", str(out)]) == 1
     assert main(["timewarp", str(src), "--poses", str(tmp_path / "poses.json"), "--margin", "30", "-o", str(out)]) == 1
+
+
+def test_cli_timewarp_without_depth_fails_before_any_frame(tmp_path, capsys):
+    """A view without depth and a list of poses whose third moves the head: refused before the
+    first frame is warped, naming the pose (it used to fail at that pose, after two frames'
+    work); the same poses with ``--mode rotation`` run."""
+    import json
+
+    from cli import main
+    from ibr.io import save_view
+    from ibr.stereo.timewarp import timewarp_mode
+
+    cam = Camera.from_fov(32, 24, hfov_deg=60)
+    src = save_view(View(np.zeros((24, 32, 3), np.uint8), None, cam), tmp_path / "flat.json")
+    turned = _rotated(cam, yaw=2, pitch=0)
+    moved = cam.translated([0.05, 0, 0])
+    poses = [cam.world_from_cam.tolist(), turned.world_from_cam.tolist(), moved.world_from_cam.tolist()]
+    (tmp_path / "poses.json").write_text(json.dumps(poses))
+    assert [timewarp_mode(cam, c) for c in (cam, turned, moved)] == ["rotation", "rotation", "depth"]
+    out = tmp_path / "frames"
+    args = ["timewarp", str(src), "--poses", str(tmp_path / "poses.json"), "-o", str(out)]
+    assert main(args) == 1
+    err = capsys.readouterr().err
+    assert "VIEW:" in err and "no depth" in err and "pose 2" in err and "--mode rotation" in err
+    assert not out.exists() or not any(out.iterdir())
+    assert main(args + ["--mode", "rotation"]) == 0
+    assert len(list(out.glob("frame_*.png"))) == 3
+    with pytest.raises(ValueError, match="mode: expected one of"):
+        timewarp_mode(cam, moved, mode="fast")

@@ -38,6 +38,7 @@ __all__ = [
     "guard_band_camera",
     "rotation_homography",
     "timewarp",
+    "timewarp_mode",
     "upconvert",
     "warp_rotation",
 ]
@@ -161,6 +162,17 @@ def _depth_warp(view: View, dst: Camera) -> TimewarpFrame:
     return TimewarpFrame(color, outside & holes, holes, dst)
 
 
+def timewarp_mode(src: Camera, dst: Camera, *, mode: str = "auto", atol: float = 1e-9) -> str:
+    """The warp :func:`timewarp` uses from ``src`` to ``dst``: ``"rotation"`` or ``"depth"``
+    (``mode`` itself unless it is ``"auto"``: rotation when the centres coincide within
+    ``atol`` scene units). A caller checks with it, before any work, whether a list of poses
+    needs the view's depth."""
+    check_choice("mode", mode, MODES)
+    if mode != "auto":
+        return mode
+    return "depth" if np.linalg.norm(src.position - dst.position) > atol else "rotation"
+
+
 def timewarp(view: View, dst: Camera, *, mode: str = "auto", atol: float = 1e-9) -> TimewarpFrame:
     """Warp a rendered frame (ideally a guard-band render) to the display camera ``dst``.
 
@@ -171,10 +183,7 @@ def timewarp(view: View, dst: Camera, *, mode: str = "auto", atol: float = 1e-9)
     if not isinstance(view, View):
         raise TypeError(f"view: expected a View, got {type(view).__name__}")
     _check_camera("dst", dst)
-    check_choice("mode", mode, MODES)
-    if mode == "auto":
-        moved = np.linalg.norm(view.camera.position - dst.position) > atol
-        mode = "depth" if moved else "rotation"
+    mode = timewarp_mode(view.camera, dst, mode=mode, atol=atol)
     if mode == "rotation":
         return warp_rotation(view.color, view.camera, dst, ignore_translation=True)
     view.require_depth("a depth time-warp")
