@@ -268,10 +268,18 @@ def test_samples_refuses_the_bundled_folder_and_leaves_it_intact(capsys, tmp_pat
 
 
 # --------------------------------------------------------------------------- killing a long command
+def _start_cli(args, cwd):
+    """``python cli.py ARGS`` with stderr piped, as a user starts it from a shell: Ctrl-C
+    (SIGINT) restored to its default in the child. A shell without job control starts background
+    commands with SIGINT ignored, and Python then installs no KeyboardInterrupt handler: a test
+    run that way (``.ci/run ... &``) saw the command ignore the test's SIGINT and hang."""
+    return subprocess.Popen([sys.executable, str(ROOT / "cli.py"), *args], cwd=cwd, stderr=subprocess.PIPE,
+                            stdout=subprocess.DEVNULL, text=True, env=dict(os.environ, PYTHONUNBUFFERED="1"),
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+
+
 def _run_and_kill(args, cwd, sig, after_lines=4, timeout=120):
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen([sys.executable, str(ROOT / "cli.py"), *args], cwd=cwd, stderr=subprocess.PIPE,
-                            stdout=subprocess.DEVNULL, text=True, env=env)
+    proc = _start_cli(args, cwd)
     seen = []
     deadline = time.monotonic() + timeout
     for line in proc.stderr:  # non-TTY progress: one line per frame
@@ -322,8 +330,7 @@ def test_killing_interpolate_with_video_leaves_no_partial_or_mixed_output(base, 
 
 # --------------------------------------------------------------------------- the viewer's folders
 def _serve(args, cwd):
-    proc = subprocess.Popen([sys.executable, str(ROOT / "cli.py"), "view", *args], cwd=cwd, stderr=subprocess.PIPE,
-                            stdout=subprocess.DEVNULL, text=True, env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    proc = _start_cli(["view", *args], cwd)
     for line in proc.stderr:
         if "serving" in line:
             return proc, line
