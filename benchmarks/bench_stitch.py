@@ -187,6 +187,18 @@ def accuracy(args, rows):
             results[(rig, face, cam.eye)] = (e, tr)
             rows.append((f"ODS {cam.eye} from {rig} {face}^2", f"{psnr(e.color, tr[0], cov):.2f} dB",
                          f"seen {cov.mean():.1%}; seam band/interior MSE {clean:.2f} (incl. silhouettes {raw:.2f})"))
+    # what no ring camera saw (the polar caps): the directional fill against the panorama fill
+    from ibr.render.fill import fill_background
+    from panorama.stitch.fill import fill_panorama
+
+    for eye in ("left", "right"):
+        e, tr = results[("ring", args.face, eye)]
+        if e.holes.any():
+            old, _, _ = fill_background(e.color, e.depth, e.holes)
+            new, _, _ = fill_panorama(e.color, e.depth, e.holes)
+            rows.append((f"ODS {eye} from ring {args.face}^2, unseen {e.holes.mean():.1%}: panorama fill",
+                         f"{psnr(new, tr[0], e.holes):.2f} dB", f"directional fill {psnr(old, tr[0], e.holes):.2f} dB "
+                         "on the same hole pixels (streaks in the caps)"))
     # one centre RGB-D panorama (the mono truth) -> ODS
     pair = ods_from_panorama(t_mono[0], t_mono[1], fill="background")
     for e, tr in zip(pair.eyes, t_eyes):

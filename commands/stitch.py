@@ -48,9 +48,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--layout", choices=("equirect",) + LAYOUTS, default=None,
                         help="ODS: top-bottom (left eye on top, default), sbs, cube, anaglyph; mono: equirect "
                              "(default) or cube (faces in a horizontal strip +x -x +y -y +z -z)")
-    parser.add_argument("--fill", choices=("none", "background"), default=None,
-                        help="fill pixels no view saw from the background side (default: none for views, "
-                             "background for --panorama); --holes-out always has the unfilled mask")
+    parser.add_argument("--fill", choices=("none", "background"), default="background",
+                        help="pixels no view saw: background (default) fills disocclusions from the background "
+                             "side and unseen regions such as a ring rig's poles smoothly; none leaves them "
+                             "black; --holes-out always has the unfilled mask")
     parser.add_argument("--center", type=float, nargs=3, metavar=("X", "Y", "Z"),
                         help="capture point in the world frame (default: centroid of the view centres)")
 
@@ -89,7 +90,7 @@ def _stitch_frame(args, views, panorama, tick):
     from panorama.convert import equirect_to_cubemap
     from panorama.stitch import equirect_camera, ods_from_panorama, ods_from_views, pack_ods, stitch_rgbd
 
-    fill = args.fill or ("background" if panorama else "none")
+    fill = args.fill
     if args.stereo == "ods":
         kw = dict(ipd=args.ipd, fade_start_deg=args.fade[0], fade_end_deg=args.fade[1], fill=fill, progress=tick)
         if panorama:
@@ -115,10 +116,10 @@ def _stitch_frame(args, views, panorama, tick):
     res = stitch_rgbd(views, equirect_camera(args.width, center=center), progress=tick)
     packed, depth, holes = res.color, res.depth, res.holes
     if fill == "background" and holes.any():
-        from ibr.render.fill import fill_background
+        from panorama.stitch.fill import fill_panorama
 
         c3 = packed if packed.ndim == 3 else packed[..., None]
-        packed, depth, _ = fill_background(c3, depth, holes)
+        packed, depth, _ = fill_panorama(c3, depth, holes)
     if args.layout == "cube":
         s = args.width // 4
         packed = _strip(equirect_to_cubemap(packed, s, layout="dict"))
@@ -145,7 +146,7 @@ def _write(plan, out, dep, holes_out, packed, depth, holes) -> None:
 
 
 def _describe(args, n, seen, panorama) -> str:
-    fill = args.fill or ("background" if panorama else "none")
+    fill = args.fill
     return (f"{n} {'cube faces of the panorama' if panorama else 'views'}, "
             f"{'ODS ' + (args.layout or 'top-bottom') if args.stereo == 'ods' else 'mono'}, "
             f"seen {seen:.2%} of the sphere (holes {1 - seen:.2%}{', filled' if fill != 'none' else ''})")

@@ -23,7 +23,7 @@ import numpy as np
 from ibr.base.ray_camera import SphericalCamera
 from ibr.base.validate import check_choice, check_finite_scalar
 from ibr.base.view import View
-from ibr.render.fill import fill_background
+from .fill import fill_panorama
 
 from ..convert import equirect_to_cubemap
 from ..directions import FACE_NAMES
@@ -67,7 +67,7 @@ def _fill(eye: Stitched) -> Stitched:
     if not eye.holes.any():
         return eye
     color = eye.color if eye.color.ndim == 3 else eye.color[..., None]
-    col, depth, _ = fill_background(color, eye.depth, eye.holes)
+    col, depth, _ = fill_panorama(color, eye.depth, eye.holes)
     if eye.color.ndim == 2:
         col = col[..., 0]
     return Stitched(col, depth, eye.holes, eye.winner, eye.camera)
