@@ -118,8 +118,7 @@ def _stitch_frame(args, views, panorama, tick):
     if fill == "background" and holes.any():
         from panorama.stitch.fill import fill_panorama
 
-        c3 = packed if packed.ndim == 3 else packed[..., None]
-        packed, depth, _ = fill_panorama(c3, depth, holes)
+        packed, depth, _ = fill_panorama(packed, depth, holes)
     if args.layout == "cube":
         s = args.width // 4
         packed = _strip(equirect_to_cubemap(packed, s, layout="dict"))

@@ -89,9 +89,10 @@ def run(args) -> int:
         cams = load_cameras(args.poses, display)
         moved = [i for i, c in enumerate(cams) if timewarp_mode(view.camera, c, mode=args.mode) == "depth"]
         if moved and view.depth is None:  # found before any frame is warped, not at the first moved pose
-            raise ValueError(f"VIEW: {args.view} has no depth, but pose {moved[0]} of --poses "
-                             + ("moves the head (a depth warp); give a view with depth or --mode rotation"
-                                if args.mode == "auto" else "needs it (--mode depth)"))
+            raise ValueError(f"VIEW: {args.view}: pose {moved[0]} of --poses "
+                             + ("moves the head: " if args.mode == "auto" else "(--mode depth): ")
+                             + "a depth time-warp needs depth, but the view has none"
+                             + ("; give a view with depth or --mode rotation" if args.mode == "auto" else ""))
         for i, c in progress(enumerate(cams), len(cams), "timewarp"):
             fr = timewarp(view, c, mode=args.mode)
             path = plan.stage(out, f"frame_{i:04d}.png")

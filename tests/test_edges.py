@@ -163,7 +163,8 @@ def test_any_plane_in_8bit_disparity_has_no_break_edge_and_keeps_the_bound(du, d
     to the truth). Slow ramps (about 1 % of tilts) split into many quads, within that bound."""
     from ibr.mesh.segment import QUANT_BREAK_CODES, break_edges
 
-    _, codes, q, d = tilted_disparity_plane(du, dv)
+    with np.errstate(divide="ignore"):  # tilts that reach d <= 0 are dropped just below
+        _, codes, q, d = tilted_disparity_plane(du, dv)
     assume(d.min() > 2)
     hb, vb = break_edges(1.0 / codes.depth.astype(np.float64), QUANT_BREAK_CODES * q.c0)
     assert not hb.any() and not vb.any()
@@ -189,9 +190,9 @@ def test_exact_depth_mesh_is_unchanged_by_a_zero_step_quantization():
 def test_clutter_in_8bit_disparity_renders_close_to_its_exact_depth():
     """The bundled clutter pair re-encoded as 8-bit integer disparity (its own baseline, like
     Middlebury's ground truth), t = 0.5, covered pixels: within 0.75 dB of the render from the
-    exact depth (measured 0.66; 0.87 when second differences of two codes never broke an edge,
-    and the post right of the face was drawn a pixel too wide). Quads stay fewer than on the
-    exact depth."""
+    exact depth (measured 0.66 at t = 0.5, 0.55 over t = .25/.5/.75; 0.87 at t = 0.5 when second
+    differences of two codes never broke an edge, and the post right of the face was drawn a
+    pixel too wide). Quads stay fewer than on the exact depth."""
     a, b = load_view(DATA_DIR / "clutter_a.json"), load_view(DATA_DIR / "clutter_b.json")
     truth = load_view(DATA_DIR / "clutter_t050.json")
     bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx

@@ -230,6 +230,32 @@ def test_unseen_polar_caps_are_filled_smoothly_not_with_streaks(ring_views, trut
     assert u8.dtype == np.uint8 and np.abs(u8.astype(np.float64) / 255 - new).max() < 1.0 / 255 + 1e-6
 
 
+def test_panorama_fill_far_from_a_seen_region_keeps_its_colour():
+    """Hard cases of the smooth fill: a panorama seen over one side only (20 % of the columns),
+    hole values that are NaN, a 1-row strip, a view with no depth at all (the directional fill
+    reaches nothing) and grey (H, W) colour. A constant seen colour must come out constant
+    everywhere (the coarsest pyramid level used to leave empty cells black: 47 % of these holes
+    were darker than half the colour), every hole pixel counts as filled, seen pixels unchanged."""
+    from panorama.stitch.fill import fill_panorama
+
+    for shape, seen_cols, depth_value in (((128, 256), 51, 2.0), ((1, 64), 3, 2.0), ((40, 64), 20, np.nan)):
+        color = np.full(shape + (3,), 0.8, np.float32)
+        holes = np.ones(shape, bool)
+        holes[:, :seen_cols] = False
+        color[holes] = np.nan  # ignored
+        depth = np.where(holes, np.nan, depth_value).astype(np.float32)
+        out, _, filled = fill_panorama(color, depth, holes, cap_px=4)
+        np.testing.assert_allclose(out, 0.8, atol=1e-4)
+        assert filled[holes].all() and not filled[~holes].any()
+        grey, _, _ = fill_panorama(color[..., 0], depth, holes, cap_px=4)
+        assert grey.shape == shape
+        np.testing.assert_allclose(grey, 0.8, atol=1e-4)
+    with pytest.raises(TypeError, match="cap_px"):
+        fill_panorama(color, depth, holes, cap_px=True)
+    with pytest.raises(ValueError, match="cap_px"):
+        fill_panorama(color, depth, holes, cap_px=0)
+
+
 def test_a_source_that_sees_nothing_changes_nothing(cube_views):
     plane = make_scene("plane")
     pose = np.eye(4)

@@ -195,9 +195,17 @@ def test_cli_timewarp_without_depth_fails_before_any_frame(tmp_path, capsys):
     args = ["timewarp", str(src), "--poses", str(tmp_path / "poses.json"), "-o", str(out)]
     assert main(args) == 1
     err = capsys.readouterr().err
-    assert "VIEW:" in err and "no depth" in err and "pose 2" in err and "--mode rotation" in err
+    assert "VIEW:" in err and "pose 2" in err and "--mode rotation" in err
+    assert "a depth time-warp needs depth, but the view has none" in err  # the library's words
     assert not out.exists() or not any(out.iterdir())
     assert main(args + ["--mode", "rotation"]) == 0
     assert len(list(out.glob("frame_*.png"))) == 3
     with pytest.raises(ValueError, match="mode: expected one of"):
         timewarp_mode(cam, moved, mode="fast")
+    with pytest.raises(TypeError, match="src"):
+        timewarp_mode(None, moved)
+    with pytest.raises(ValueError, match="atol"):
+        timewarp_mode(cam, moved, atol=-1.0)
+    with pytest.raises(ValueError, match="atol"):
+        timewarp_mode(cam, moved, atol=float("nan"))
+    assert timewarp_mode(cam, moved, atol=0.1) == "rotation"  # a 5 cm move within the tolerance

@@ -28,7 +28,7 @@ from typing import Callable, Sequence
 import cv2
 import numpy as np
 
-from ..base.validate import COLOR_DTYPES, check_choice, check_image
+from ..base.validate import COLOR_DTYPES, check_choice, check_finite_scalar, check_image
 from ..base.camera import Camera
 from ..base.view import View
 
@@ -167,10 +167,15 @@ def timewarp_mode(src: Camera, dst: Camera, *, mode: str = "auto", atol: float =
     (``mode`` itself unless it is ``"auto"``: rotation when the centres coincide within
     ``atol`` scene units). A caller checks with it, before any work, whether a list of poses
     needs the view's depth."""
+    _check_camera("src", src)
+    _check_camera("dst", dst)
     check_choice("mode", mode, MODES)
+    tol = check_finite_scalar("atol", atol)
+    if tol < 0:
+        raise ValueError(f"atol: expected a distance >= 0 (scene units), got {atol!r}")
     if mode != "auto":
         return mode
-    return "depth" if np.linalg.norm(src.position - dst.position) > atol else "rotation"
+    return "depth" if np.linalg.norm(src.position - dst.position) > tol else "rotation"
 
 
 def timewarp(view: View, dst: Camera, *, mode: str = "auto", atol: float = 1e-9) -> TimewarpFrame:

@@ -9,7 +9,8 @@ Regions no camera saw (the zenith and nadir of a ring of cameras, 41.5 % of each
 8-camera ring) are tens to hundreds of pixels from any seen pixel; copying rows or columns into
 them draws tall streaks. There the fill blends, with the distance to the nearest seen pixel, into
 a smooth normalized pyramid of the seen colours (no depth: nothing behind a cap is known).
-Measured on the ring's ODS eyes at 1024 wide: hole pixels 23.8 -> 25.6 dB, no streaks.
+Measured on the ring's ODS eyes: hole pixels 23.8 -> 25.6 dB at 1024 wide, 24.5 -> 26.3 at 512
+(``benchmarks/bench_stitch.py --quick``), no streaks.
 
 Pixel convention: (u, v) = (column, row) of the equirect (or any image), centres at integers. The
 equirect's left and right edges are not joined (as in ``fill_background``).
@@ -18,6 +19,8 @@ equirect's left and right edges are not joined (as in ``fill_background``).
 from __future__ import annotations
 
 import numpy as np
+
+from ibr.base.validate import check_positive
 
 __all__ = ["CAP_PX_PER_WIDTH", "fill_panorama"]
 
@@ -33,7 +36,8 @@ def fill_panorama(color, depth, holes, *, cap_px: float | None = None):
 
     Parameters
     ----------
-    color : (H, W, C) array, any dtype (integers are rounded back)
+    color : (H, W) or (H, W, C) array, any dtype (integers are rounded back); the values at
+        hole pixels are ignored (NaN allowed there)
     depth : (H, W) float32 range or depth of the seen pixels (NaN where unknown)
     holes : (H, W) bool, the pixels no view saw
     cap_px : float, optional
@@ -43,42 +47,56 @@ def fill_panorama(color, depth, holes, *, cap_px: float | None = None):
     Returns
     -------
     color, depth, filled
-        New arrays (as :func:`ibr.render.fill.fill_background`): holes take the background side's
-        colour, blended far from any seen pixel into the smooth fill; the depth is the directional
-        fill's; every other pixel is bit-identical.
+        New arrays, colour in the input's shape: holes take the background side's colour
+        (:func:`ibr.render.fill.fill_background`), blended far from any seen pixel into the
+        smooth fill; hole pixels the directional fill cannot reach (no seen neighbour with depth
+        on their row or column) take the smooth fill alone. The depth is the directional fill's
+        (NaN where it reached nothing); ``filled`` marks every hole pixel given a colour (all of
+        them when any pixel was seen). Seen pixels are bit-identical.
     """
     import cv2
 
-    from ibr.base.validate import check_positive
     from ibr.render.fill import fill_background
 
-    out, z, filled = fill_background(color, depth, holes)
+    if cap_px is not None:
+        if isinstance(cap_px, (bool, str)):
+            raise TypeError(f"cap_px: expected a real number of pixels, got {cap_px!r}")
+        cap_px = check_positive("cap_px", cap_px)
+    color = np.asarray(color)
+    flat = color.ndim == 2
+    out, z, filled = fill_background(color[..., None] if flat else color, depth, holes)
     h, w = out.shape[:2]
-    cap = max(4.0, w * CAP_PX_PER_WIDTH) if cap_px is None else check_positive("cap_px", cap_px)
     holes = np.asarray(holes)
-    if not holes.any() or holes.all():
-        return out, z, filled
-    dist = cv2.distanceTransform(holes.astype(np.uint8), cv2.DIST_L2, 5)
-    far = dist > cap
-    if not far.any():
-        return out, z, filled
-    smooth = _smooth_fill(np.asarray(color, np.float32).reshape(h, w, -1), holes)
-    t = np.clip((dist[far] - cap) / cap, 0.0, 1.0)[:, None]
-    blend = (1.0 - t) * out.reshape(h, w, -1)[far].astype(np.float32) + t * smooth[far]
-    if out.dtype.kind in "ui":
-        info = np.iinfo(out.dtype)
-        blend = np.clip(np.rint(blend), info.min, info.max)
-    out.reshape(h, w, -1)[far] = blend.astype(out.dtype)
-    return out, z, filled
+    if holes.any() and not holes.all():
+        cap = max(4.0, w * CAP_PX_PER_WIDTH) if cap_px is None else cap_px
+        dist = cv2.distanceTransform(holes.astype(np.uint8), cv2.DIST_L2, 5)
+        # blend weight of the smooth fill: 0 near seen pixels, 1 from 2 cap_px on, and 1 where the
+        # directional fill reached nothing
+        t = np.where(filled, np.clip((dist - cap) / cap, 0.0, 1.0), 1.0)
+        t[~holes] = 0.0
+        far = t > 0
+        if far.any():
+            seen_color = np.where(holes[..., None], 0.0, out.astype(np.float32))  # hole values ignored
+            smooth = _smooth_fill(seen_color, holes)
+            tf = t[far][:, None]
+            blend = (1.0 - tf) * np.where(filled[far][:, None], out[far].astype(np.float32), 0.0) + tf * smooth[far]
+            if out.dtype.kind in "ui":
+                info = np.iinfo(out.dtype)
+                blend = np.clip(np.rint(blend), info.min, info.max)
+            out[far] = blend.astype(out.dtype)
+            filled = filled | far
+    return (out[..., 0] if flat else out), z, filled
 
 
 def _smooth_fill(color: np.ndarray, holes: np.ndarray) -> np.ndarray:
-    """(H, W, C) float32: the seen colours spread smoothly over the holes by a normalized pyramid
-    (``cv2.pyrDown`` of weighted colour and weight; on the way up each level keeps its own
-    normalized colour where its weight is high and takes the coarser level's elsewhere)."""
+    """(H, W, C) float32: the seen colours (``color`` 0 at the holes) spread smoothly over the
+    holes by a normalized pyramid: ``cv2.pyrDown`` of the weighted colour and of the weight; on
+    the way up each level keeps its own normalized colour where its weight is high and takes the
+    coarser level's elsewhere; the coarsest level's empty cells take the mean seen colour."""
     import cv2
 
     weight = (~holes).astype(np.float32)
+    mean = color.reshape(-1, color.shape[2]).sum(0) / max(float(weight.sum()), 1.0)
     levels = []
     s, wt = color * weight[..., None], weight
     while min(s.shape[:2]) > 2:
@@ -86,11 +104,12 @@ def _smooth_fill(color: np.ndarray, holes: np.ndarray) -> np.ndarray:
         s, wt = cv2.pyrDown(s), cv2.pyrDown(wt)
         if s.ndim == 2:  # OpenCV drops a single channel
             s = s[..., None]
-    val = s / np.maximum(wt, 1e-6)[..., None]
+    own = np.clip(4.0 * wt, 0.0, 1.0)[..., None]
+    val = own * (s / np.maximum(wt, 1e-6)[..., None]) + (1.0 - own) * mean
     for s, wt in reversed(levels):
         up = cv2.pyrUp(val, dstsize=(s.shape[1], s.shape[0]))
         if up.ndim == 2:
             up = up[..., None]
         own = np.clip(4.0 * wt, 0.0, 1.0)[..., None]
         val = own * (s / np.maximum(wt, 1e-6)[..., None]) + (1.0 - own) * up
-    return val
+    return val.astype(np.float32)

@@ -66,10 +66,7 @@ def _check_ipd(ipd, fade_start_deg, fade_end_deg):
 def _fill(eye: Stitched) -> Stitched:
     if not eye.holes.any():
         return eye
-    color = eye.color if eye.color.ndim == 3 else eye.color[..., None]
-    col, depth, _ = fill_panorama(color, eye.depth, eye.holes)
-    if eye.color.ndim == 2:
-        col = col[..., 0]
+    col, depth, _ = fill_panorama(eye.color, eye.depth, eye.holes)
     return Stitched(col, depth, eye.holes, eye.winner, eye.camera)
 
 
