@@ -266,9 +266,10 @@ def check_image_size(name: str, width, height, *, channels: int = 1, itemsize: i
     return w, h
 
 
-def check_color(name: str, value) -> np.ndarray:
-    """A colour image: (H, W), (H, W, 3) or (H, W, 4) of uint8, uint16, float32 or float64."""
-    arr = check_image(name, value, channels=(1, 3, 4))
+def check_color(name: str, value, *, channels: Iterable[int] | None = (1, 3, 4)) -> np.ndarray:
+    """A colour image: (H, W), (H, W, 3) or (H, W, 4) (``channels``; None: any number) of uint8,
+    uint16, float32 or float64 (the dtypes OpenCV's resize, remap and warps have kernels for)."""
+    arr = check_image(name, value, channels=channels)
     if arr.dtype.name not in COLOR_DTYPES:
         raise TypeError(f"{name}: expected a colour dtype {', '.join(COLOR_DTYPES)}, got {arr.dtype}")
     return arr

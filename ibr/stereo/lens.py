@@ -39,7 +39,7 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from ..base.validate import (COLOR_DTYPES, check_array, check_choice, check_finite_scalar, check_image, check_number,
+from ..base.validate import (check_array, check_choice, check_color, check_finite_scalar, check_image, check_number,
                              check_positive)
 
 __all__ = [
@@ -289,9 +289,7 @@ def predistort(image, lens, *, center_px=None, scale_px: float | None = None,
     Outside the lens range the output is 0 (black). Keeps the dtype; see :func:`distortion_maps`
     for the pixel convention.
     """
-    img = check_image("image", image)
-    if img.dtype.name not in COLOR_DTYPES:  # cv2.remap has no kernel for the others (#12)
-        raise TypeError(f"image: expected a colour dtype {', '.join(COLOR_DTYPES)}, got {img.dtype}")
+    img = check_color("image", image, channels=None)  # cv2.remap has no kernel for other dtypes (#12)
     lenses = _lenses(lens)
     h, w = img.shape[:2]
     if len(lenses) == 1:

@@ -36,7 +36,7 @@ import numpy as np
 from . import _pair_kernels as _k
 from ..render import _fill_kernels as _fill_k
 from ..render.bands import run_bands
-from ..base.validate import (COLOR_DTYPES, check_array, check_choice, check_finite_scalar, check_image,
+from ..base.validate import (check_array, check_choice, check_color, check_finite_scalar, check_image,
                              check_mesh_options, check_positive)
 from ..base.camera import Camera, camera_from_gl_projection
 from ..base.view import View
@@ -305,11 +305,8 @@ def stereo_pair_from_zbuffer(color, zbuffer, projection, *, e: float, f: float, 
 
 # ---------------------------------------------------------------------- output formats
 def _pair(left, right) -> tuple[np.ndarray, np.ndarray]:
-    l_img = check_image("left", left)
-    r_img = check_image("right", right)
-    for name, img in (("left", l_img), ("right", r_img)):  # cv2.resize has no kernel for the others
-        if img.dtype.name not in COLOR_DTYPES:
-            raise TypeError(f"{name}: expected a colour dtype {', '.join(COLOR_DTYPES)}, got {img.dtype}")
+    l_img = check_color("left", left, channels=None)  # cv2.resize has no kernel for other dtypes
+    r_img = check_color("right", right, channels=None)
     if l_img.shape != r_img.shape or l_img.dtype != r_img.dtype:
         raise ValueError(f"right: expected shape {l_img.shape} and dtype {l_img.dtype} (the left's), "
                          f"got {r_img.shape} {r_img.dtype}")

@@ -28,7 +28,7 @@ from typing import Callable, Sequence
 import cv2
 import numpy as np
 
-from ..base.validate import COLOR_DTYPES, check_choice, check_finite_scalar, check_image
+from ..base.validate import check_choice, check_color, check_finite_scalar
 from ..base.camera import Camera
 from ..base.view import View
 
@@ -121,9 +121,7 @@ def warp_rotation(color, src: Camera, dst: Camera, *, ignore_translation: bool =
     """
     _check_camera("src", src)
     _check_camera("dst", dst)
-    img = check_image("color", color)
-    if img.dtype.name not in COLOR_DTYPES:  # cv2.warpPerspective / remap have no kernel for the others
-        raise TypeError(f"color: expected a colour dtype {', '.join(COLOR_DTYPES)}, got {img.dtype}")
+    img = check_color("color", color, channels=None)  # cv2.warpPerspective / remap: these dtypes only
     if img.shape[:2] != src.shape:
         raise ValueError(f"color: size {img.shape[1]}x{img.shape[0]} does not match src {src.width}x{src.height}")
     h_sd = np.linalg.inv(rotation_homography(src, dst, ignore_translation=ignore_translation))
