@@ -90,9 +90,9 @@ def _stitch_frame(args, views, panorama, tick):
     from panorama.convert import equirect_to_cubemap
     from panorama.stitch import equirect_camera, ods_from_panorama, ods_from_views, pack_ods, stitch_rgbd
 
-    fill = args.fill
     if args.stereo == "ods":
-        kw = dict(ipd=args.ipd, fade_start_deg=args.fade[0], fade_end_deg=args.fade[1], fill=fill, progress=tick)
+        kw = dict(ipd=args.ipd, fade_start_deg=args.fade[0], fade_end_deg=args.fade[1], fill=args.fill,
+                  progress=tick)
         if panorama:
             pair = ods_from_panorama(*panorama, width=args.width, **kw)
         else:
@@ -115,7 +115,7 @@ def _stitch_frame(args, views, panorama, tick):
     center = args.center if args.center is not None else np.mean([v.camera.position for v in views], axis=0)
     res = stitch_rgbd(views, equirect_camera(args.width, center=center), progress=tick)
     packed, depth, holes = res.color, res.depth, res.holes
-    if fill == "background" and holes.any():
+    if args.fill == "background" and holes.any():
         from panorama.stitch.fill import fill_panorama
 
         packed, depth, _ = fill_panorama(packed, depth, holes)
@@ -145,10 +145,9 @@ def _write(plan, out, dep, holes_out, packed, depth, holes) -> None:
 
 
 def _describe(args, n, seen, panorama) -> str:
-    fill = args.fill
     return (f"{n} {'cube faces of the panorama' if panorama else 'views'}, "
             f"{'ODS ' + (args.layout or 'top-bottom') if args.stereo == 'ods' else 'mono'}, "
-            f"seen {seen:.2%} of the sphere (holes {1 - seen:.2%}{', filled' if fill != 'none' else ''})")
+            f"seen {seen:.2%} of the sphere (holes {1 - seen:.2%}{', filled' if args.fill != 'none' else ''})")
 
 
 def _run_sequences(args) -> int:
