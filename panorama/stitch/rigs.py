@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ibr.base.camera import Camera
-from ibr.base.validate import check_array, check_finite_scalar
+from ibr.base.validate import check_finite_scalar
 from ibr.base.ray_camera import SphericalCamera
 
 from ..directions import WORLD_FROM_FACE
@@ -19,7 +19,8 @@ from ..directions import WORLD_FROM_FACE
 __all__ = ["cube_rig", "equirect_camera", "ods_cameras", "ring_rig"]
 
 
-def _translation(center) -> np.ndarray:
+def _center(center) -> np.ndarray:
+    """A rig's capture point as a float64 3-vector, or an error naming ``center``."""
     try:
         c = np.asarray(center, dtype=np.float64)
     except (TypeError, ValueError):
@@ -28,8 +29,12 @@ def _translation(center) -> np.ndarray:
         raise ValueError(f"center: expected a finite 3-vector, got shape {c.shape}")
     if not np.all(np.isfinite(c)):
         raise ValueError(f"center: expected a finite 3-vector, got {center!r}")
+    return c
+
+
+def _translation(center) -> np.ndarray:
     m = np.eye(4)
-    m[:3, 3] = c
+    m[:3, 3] = _center(center)
     return m
 
 
@@ -79,9 +84,7 @@ def ring_rig(n: int, *, radius: float = 0.1, width: int = 640, height: int = 480
     if vfov_deg is not None and not 0 < check_finite_scalar("vfov_deg", vfov_deg) < 180:
         raise ValueError(f"vfov_deg: expected 0 < fov < 180, got {vfov_deg!r}")
     pitches_deg = [check_finite_scalar(f"pitches_deg[{i}]", x) for i, x in enumerate(np.atleast_1d(pitches_deg))]
-    c = check_array("center", center, shape=(3,), dtype_kind="fiu").astype(np.float64)
-    if not np.isfinite(c).all():
-        raise ValueError(f"center: expected finite coordinates, got {c.tolist()}")
+    c = _center(center)
     cams = []
     for pitch in pitches_deg:
         for k in range(int(n)):
