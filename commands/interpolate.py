@@ -32,6 +32,10 @@ def add_arguments(parser) -> None:
                              "background fill, or none")
     parser.add_argument("--method", choices=("mesh", "forward"), default="mesh",
                         help="quad-mesh inverse warp (default) or per-pixel forward splat (preview)")
+    parser.add_argument("--interpolation", choices=("linear", "cubic"), default="linear",
+                        help="colour reconstruction filter (default %(default)s; cubic: sharper textures, "
+                             "+0.7 / +1.5 dB on the synthetic pairs, no gain on real photographs, ~1.8x the "
+                             "frame time)")
     parser.add_argument("--composite", choices=("blend", "front"), default="blend",
                         help="depth-aware blend (default) or the seed's nearer-source-in-front order")
     parser.add_argument("--format", choices=("png", "exr"), default="png",
@@ -252,7 +256,7 @@ def run(args) -> int:
                  "(once; reused for every frame)")
 
         frames_iter = iter_interpolate(view_a, view_b, ts, method=args.method, composite_mode=args.composite,
-                                       fill=args.fill)
+                                       fill=args.fill, interpolation=args.interpolation)
         long_run = len(ts) > 10
         if long_run:
             frames_iter = progress(frames_iter, len(ts), "interpolate")

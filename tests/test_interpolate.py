@@ -192,6 +192,21 @@ def test_cli_interpolate_defaults(tmp_path, monkeypatch, capsys):
     assert not list(tmp_path.rglob(".*tmp*"))  # atomic writes leave no temporaries
 
 
+def test_cli_interpolate_cubic_is_sharper_on_the_rendered_pair(tmp_path):
+    """``--interpolation cubic`` reaches the library's bicubic sampler: on the bundled (rendered,
+    crisp-textured) clutter pair at t = 0.5 it scores higher against the ground truth than the
+    default bilinear sampling (measured 36.60 -> 37.32 dB over the whole frame; a sampler that
+    ignored the option would tie)."""
+    truth = load_view(DATA_DIR / "clutter_t050.json").color
+    scores = {}
+    for interp in ("linear", "cubic"):
+        out = tmp_path / interp
+        assert cli.main(["interpolate", "--t", "0.5", "--out", str(out), "--interpolation", interp]) == 0
+        scores[interp] = psnr(read_image(out / "frame_000_t0.500.png"), truth)
+    assert scores["cubic"] > scores["linear"] + 0.3, scores
+    assert cli.main(["interpolate", "--interpolation", "lanczos"]) == 2
+
+
 def test_cli_interpolate_files_frames_video_exr(tmp_path):
     a = DATA_DIR / "grazing_a.json"
     b = DATA_DIR / "grazing_b.json"
