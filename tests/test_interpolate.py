@@ -207,6 +207,21 @@ def test_cli_interpolate_cubic_is_sharper_on_the_rendered_pair(tmp_path):
     assert cli.main(["interpolate", "--interpolation", "lanczos"]) == 2
 
 
+def test_cubic_path_recolours_the_same_background_rims_as_the_bilinear_kernel():
+    """The bicubic (float-layer) path marks the background-rim samples beside disocclusions for
+    the fill exactly as the bilinear 8-bit kernel does (numpy there, numba here; same maps, same
+    rule): the same ``filled`` pixels on clutter at t = 0.75, 184 more than the holes (without the
+    marking the cubic path filled only the 522 holes and scored 36.63 dB, now 37.41 dB)."""
+    a, b = load_view(DATA_DIR / "clutter_a.json"), load_view(DATA_DIR / "clutter_b.json")
+    truth = load_view(DATA_DIR / "clutter_t075.json")
+    linear = interpolate(a, b, truth.camera, fill="inpaint")
+    cubic = interpolate(a, b, truth.camera, fill="inpaint", interpolation="cubic")
+    assert np.array_equal(cubic.holes, linear.holes)
+    assert np.array_equal(cubic.filled, linear.filled)
+    assert cubic.filled.sum() > cubic.holes.sum() + 100
+    assert psnr(cubic.color, truth.color) > psnr(linear.color, truth.color) + 0.3
+
+
 def test_cli_interpolate_files_frames_video_exr(tmp_path):
     a = DATA_DIR / "grazing_a.json"
     b = DATA_DIR / "grazing_b.json"

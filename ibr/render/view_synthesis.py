@@ -24,8 +24,8 @@ import numpy as np
 from ..base.validate import check_choice, check_finite_scalar, check_mesh_options, check_positive
 from ..base.camera import Camera, interpolate_cameras
 from ..base.depth import quantization_of
-from .composite import (COMPOSITE_MODES, composite, mixed_pixels, pack_trust, remap_composite, rgbt_source,
-                        sample_composite, source_trust, viewpoint_weights)
+from .composite import (COMPOSITE_MODES, Composite, composite, mixed_pixels, pack_trust, remap_composite,
+                        rgbt_source, rim_beside_holes, sample_composite, source_trust, viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_pullpush_inplace, parallax_axis
 from .rasterize import (FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_many_into, as_float_color, sample_maps, scratch,
                         scratch_maps)
@@ -277,9 +277,9 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
         layers = [scratch((slot, "rgbt"), (*camera.shape, 4), np.uint8) for slot in "ab"[:len(views)]]
         return remap_composite([g[0] for g in got], maps, weights, mode=composite_mode, depth_tol=depth_tol,
                                rims=[g[1] for g in got] if use_trust else None, layers=layers, quantization=quant)
-    trust = None
+    trust = packed = None
     if use_trust:
-        trust = [_source(v).trust(k) for v, k in zip(views, keys)]
+        trust = packed = [_source(v).trust(k) for v, k in zip(views, keys)]
     if interpolation == "linear":  # fused numba pass (no layer images, no OpenCV thread pool)
         return sample_composite(raw, maps, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype,
                                 trust=trust, quantization=quant)
@@ -291,8 +291,29 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
                             m.coverage))
     if trust is not None:
         trust = [sample_maps(np.ascontiguousarray(t[..., :1]), m.map_u, m.map_v)[..., 0] for t, m in zip(trust, maps)]
-    return composite(layers, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype, trust=trust,
+    comp = composite(layers, weights, mode=composite_mode, depth_tol=depth_tol, dtype=dtype, trust=trust,
                      quantization=quant)
+    if packed is None:
+        return comp
+    replace = _rim_samples_beside_holes(maps, [t[..., 1] < 0 for t in packed], comp.coverage)
+    return Composite(comp.color, comp.depth, comp.coverage, replace if replace.any() else None)
+
+
+def _rim_samples_beside_holes(maps, rims, coverage) -> np.ndarray:
+    """(H, W) bool: target pixels that one layer alone covers with a sample whose nearest source
+    pixel lies on that source's background rim (``rims``: per source, ``mixed_pixels(side="far")``),
+    beside a hole (``~coverage``): what the bilinear 8-bit path's kernel marks as
+    :attr:`Composite.replace` (``_nearest`` and ``_beside_hole`` in ``_composite_kernels``), here
+    in numpy for the float-layer (bicubic) path."""
+    rim = np.zeros(coverage.shape, bool)
+    for i, (m, r) in enumerate(zip(maps, rims)):
+        alone = m.coverage & ~maps[1 - i].coverage
+        ys, xs = np.nonzero(alone)
+        h, w = r.shape
+        u = np.clip(np.floor(m.map_u[ys, xs] + 0.5), 0, w - 1).astype(np.intp)
+        v = np.clip(np.floor(m.map_v[ys, xs] + 0.5), 0, h - 1).astype(np.intp)
+        rim[ys, xs] = r[v, u]
+    return rim_beside_holes(coverage, rim)
 
 
 def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
