@@ -34,7 +34,7 @@ def add_arguments(parser) -> None:
                         help="quad-mesh inverse warp (default) or per-pixel forward splat (preview)")
     parser.add_argument("--interpolation", choices=("linear", "cubic"), default="linear",
                         help="colour reconstruction filter (default %(default)s; cubic: sharper textures, "
-                             "+0.7 / +1.5 dB on the synthetic pairs, no gain on real photographs, ~1.8x the "
+                             "+0.5 to +1.5 dB on the synthetic pairs, no gain on real photographs, 1.5-1.8x the "
                              "frame time)")
     parser.add_argument("--composite", choices=("blend", "front"), default="blend",
                         help="depth-aware blend (default) or the seed's nearer-source-in-front order")
