@@ -202,7 +202,7 @@ def run_interpolate(args) -> int:
         try:
             for fr in upconvert(iter_views(seq), factor, fill=args.fill, tail=not args.no_tail,
                                 method=args.method, composite_mode=args.composite,
-                                interpolation=args.interpolation):
+                                interpolation=args.interpolation, supersample=args.supersample):
                 r = fr.rendering
                 name = f"frame_{fr.index:04d}"
                 color = (_unit_float(r.color) if args.format == "exr" else _display(r.color))

@@ -36,6 +36,9 @@ def add_arguments(parser) -> None:
                         help="colour reconstruction filter (default %(default)s; cubic: sharper textures, "
                              "+0.5 to +1.5 dB on the synthetic pairs, no gain on real photographs, 1.5-1.8x the "
                              "frame time)")
+    parser.add_argument("--supersample", type=int, choices=(1, 3, 5), default=1, metavar="K",
+                        help="K x K subsamples per pixel, box-filtered at depth edges: anti-aliased "
+                             "silhouettes (1, 3 or 5; default 1 = off; about K^2 the frame time)")
     parser.add_argument("--composite", choices=("blend", "front"), default="blend",
                         help="depth-aware blend (default) or the seed's nearer-source-in-front order")
     parser.add_argument("--format", choices=("png", "exr"), default="png",
@@ -256,7 +259,8 @@ def run(args) -> int:
                  "(once; reused for every frame)")
 
         frames_iter = iter_interpolate(view_a, view_b, ts, method=args.method, composite_mode=args.composite,
-                                       fill=args.fill, interpolation=args.interpolation)
+                                       fill=args.fill, interpolation=args.interpolation,
+                                       supersample=args.supersample)
         long_run = len(ts) > 10
         if long_run:
             frames_iter = progress(frames_iter, len(ts), "interpolate")

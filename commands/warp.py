@@ -19,6 +19,9 @@ def add_arguments(parser) -> None:
                         help="depth-aware background fill of the holes (default) or none")
     parser.add_argument("--interpolation", choices=("linear", "cubic"), default="linear",
                         help="color reconstruction filter (default %(default)s)")
+    parser.add_argument("--supersample", type=int, choices=(1, 3, 5), default=1, metavar="K",
+                        help="K x K subsamples per pixel, box-filtered at depth edges: anti-aliased "
+                             "silhouettes (1, 3 or 5; default 1 = off; about K^2 the time)")
     parser.add_argument("--depth-out", metavar="DEPTH.exr",
                         help="also write the rendered planar depth (.exr, .tif, .pfm)")
     parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (before filling; .png, .tif)")
@@ -76,7 +79,8 @@ def run(args) -> int:
             mesh = source_mesh(view)
             info(f"mesh: {len(mesh)} quads in {(time.perf_counter() - t0) * 1e3:.1f} ms")
         t0 = time.perf_counter()
-        result = warp(view, target, method=args.method, fill=args.fill, interpolation=args.interpolation)
+        result = warp(view, target, method=args.method, fill=args.fill, interpolation=args.interpolation,
+                      supersample=args.supersample)
         dt = time.perf_counter() - t0
         line = f"warp: {dt * 1e3:.1f} ms, holes {result.hole_fraction:.3%} (filled {result.filled.mean():.3%})"
         if isinstance(target, View) and target.color.shape == result.color.shape:

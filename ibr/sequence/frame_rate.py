@@ -31,6 +31,7 @@ import numpy as np
 from ..base.validate import check_choice
 from ..base.view import View
 from ..render.fill import FILLS, fill_previous
+from ..render.supersample import check_supersample
 from ..render.view_synthesis import Rendering, iter_interpolate
 
 __all__ = ["SequenceFrame", "frame_count", "frame_schedule", "upconvert"]
@@ -124,6 +125,7 @@ def upconvert(
     composite_mode: str = "blend",
     interpolation: str = "linear",
     mesh_options: dict | None = None,
+    supersample: int = 1,
 ) -> Iterator[SequenceFrame]:
     """Up-convert a sequence of RGB-D key frames by ``factor`` (yields frames in order).
 
@@ -139,7 +141,7 @@ def upconvert(
         (default, seed step 7), the depth-aware background fill of each frame, or nothing.
     tail : bool
         Extrapolate F - 1 frames after the last key (default; keeps the clip's duration).
-    method, composite_mode, interpolation, mesh_options
+    method, composite_mode, interpolation, mesh_options, supersample
         As in :func:`ibr.interpolate`.
 
     Yields
@@ -154,9 +156,10 @@ def upconvert(
     """
     factor = _check_factor(factor)
     check_choice("fill", fill, FILLS)
+    check_supersample(supersample)
     inner_fill = "none" if fill == "previous" else fill
     opts = dict(method=method, composite_mode=composite_mode, interpolation=interpolation,
-                mesh_options=mesh_options, fill=inner_fill)
+                mesh_options=mesh_options, fill=inner_fill, supersample=supersample)
     it = iter(views)
     try:
         a = next(it)
