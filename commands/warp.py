@@ -20,8 +20,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--interpolation", choices=("linear", "cubic"), default="linear",
                         help="color reconstruction filter (default %(default)s)")
     parser.add_argument("--supersample", type=int, choices=(1, 3, 5), default=1, metavar="K",
-                        help="K x K subsamples per pixel, box-filtered at depth edges: anti-aliased "
-                             "silhouettes (1, 3 or 5; default 1 = off; about K^2 the time)")
+                        help="K x K subsamples per pixel from a source upsampled with sub-pixel silhouettes, "
+                             "box-filtered at depth edges (1, 3 or 5; default 1 = off; about K^2 the time)")
     parser.add_argument("--depth-out", metavar="DEPTH.exr",
                         help="also write the rendered planar depth (.exr, .tif, .pfm)")
     parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (before filling; .png, .tif)")
@@ -74,7 +74,7 @@ def run(args) -> int:
 
         view = load_view(args.view)
         target = load_camera(args.to)
-        if args.method == "mesh" and view.depth is not None:
+        if args.method == "mesh" and view.depth is not None and args.supersample == 1:
             t0 = time.perf_counter()
             mesh = source_mesh(view)
             info(f"mesh: {len(mesh)} quads in {(time.perf_counter() - t0) * 1e3:.1f} ms")

@@ -8,6 +8,7 @@ from scipy import ndimage
 
 import cli
 from ibr.base.camera import Camera
+from ibr.base.view import View
 from ibr.io import load_view, read_image
 from ibr.render.supersample import check_supersample, downsample_rendering, edge_pixels, supersampled_camera
 from ibr.render.view_synthesis import interpolate, warp
@@ -85,38 +86,39 @@ def test_edge_pixels_and_box_filter_on_an_analytic_edge():
     assert edge_pixels(flat, np.ones((k, k), bool), k, 0.005).all()
 
 
-def test_interpolate_supersampled_is_sharper_at_edges_and_the_same_elsewhere(clutter):
-    """Clutter, fill "none", t = .25/.5/.75: the edge band (covered pixels) gains over a dB and a
-    half (measured 28.16 -> 29.95 dB); holes and depth are exactly the plain render's, and so is
-    the colour of every pixel that is not an edge pixel (about 98.5 % of them)."""
+def test_interpolate_supersampled_is_sharper_at_edges(clutter):
+    """Clutter, fill "none", t = .25/.5/.75: the edge band (covered pixels) gains well over two
+    dB and the whole covered frame over one and a half (measured 28.16 -> 31.02 and 37.07 ->
+    39.29 dB); the geometry is the plain render's (holes within 0.05 % of the frame, depth
+    within 2 % at 99 % of the pixels both cover)."""
     a, b, truths = clutter
     cams = [g.camera for g in truths]
     plain = interpolate(a, b, cams, fill="none")
     fine = interpolate(a, b, cams, fill="none", supersample=3)
     band_plain = [psnr(r.color, g.color, edge_band(g.depth) & ~r.holes) for r, g in zip(plain, truths)]
     band_fine = [psnr(r.color, g.color, edge_band(g.depth) & ~r.holes) for r, g in zip(fine, truths)]
-    assert np.mean(band_fine) > np.mean(band_plain) + 1.2, (band_plain, band_fine)
+    assert np.mean(band_fine) > np.mean(band_plain) + 2.0, (band_plain, band_fine)
+    all_plain = [psnr(r.color, g.color, ~r.holes) for r, g in zip(plain, truths)]
+    all_fine = [psnr(r.color, g.color, ~r.holes) for r, g in zip(fine, truths)]
+    assert np.mean(all_fine) > np.mean(all_plain) + 1.5, (all_plain, all_fine)
     for p, f in zip(plain, fine):
         assert f.camera is p.camera or f.camera.allclose(p.camera)
-        assert np.array_equal(f.holes, p.holes) and np.array_equal(f.filled, p.filled)
-        assert np.array_equal(f.depth, p.depth, equal_nan=True)
-        changed = np.any(f.color != p.color, axis=-1)
-        assert 0.005 < changed.mean() < 0.03
-        # the changed pixels are at depth edges of the render (a few more where subsamples
-        # straddle a crease steeper than the band's 2 % between pixel centres: 1, 10, 3 here)
-        assert (changed & ~edge_band(p.depth)).sum() <= 0.01 * changed.sum()
+        assert f.color.shape == p.color.shape and f.color.dtype == p.color.dtype
+        assert abs(f.holes.mean() - p.holes.mean()) < 0.0005
+        both = ~f.holes & ~p.holes
+        assert np.percentile(np.abs(f.depth[both] / p.depth[both] - 1), 99) < 0.02
 
 
 def test_motorcycle_left_to_right_gains_on_real_photographs():
-    """The real Middlebury pair: covered pixels against the real right image, 27.55 -> 27.91 dB
-    (measured), same holes."""
+    """The real Middlebury pair: covered pixels against the real right image, 27.55 -> 28.22 dB
+    (measured; the silhouettes are placed from the photographs' own mixed pixels)."""
     from ibr.io.middlebury import motorcycle_views
 
     left, right = motorcycle_views()
     plain = warp(left, right.camera, fill="none")
     fine = warp(left, right.camera, fill="none", supersample=3)
-    assert np.array_equal(plain.holes, fine.holes)
-    assert psnr(fine.color, right.color, ~fine.holes) > psnr(plain.color, right.color, ~plain.holes) + 0.2
+    both = ~plain.holes & ~fine.holes
+    assert psnr(fine.color, right.color, both) > psnr(plain.color, right.color, both) + 0.4
 
 
 def test_cli_interpolate_and_warp_take_supersample(tmp_path, capsys):
@@ -126,10 +128,68 @@ def test_cli_interpolate_and_warp_take_supersample(tmp_path, capsys):
         out = tmp_path / f"k{k}"
         assert cli.main(["interpolate", "--t", "0.5", "--out", str(out), "--supersample", str(k)]) == 0
         scores[k] = psnr(read_image(out / "frame_000_t0.500.png"), truth)
-    assert scores[3] > scores[1] + 0.2, scores  # measured 36.60 -> 36.92 dB over the whole frame
+    assert scores[3] > scores[1] + 0.5, scores  # measured over the whole frame
     assert cli.main(["interpolate", "--supersample", "2"]) == 2
     assert "supersample" in capsys.readouterr().err
     out = tmp_path / "w.png"
     assert cli.main(["warp", str(DATA_DIR / "clutter_a.json"), "--to", str(DATA_DIR / "clutter_t050.json"),
                      "-o", str(out), "--supersample", "3"]) == 0
     assert read_image(out).shape == truth.shape
+
+
+def _edge_view(x_edge: float, *, near=2.0, far=4.0, fg=200.0, bg=20.0, h=6, w=16):
+    """A near plane left of the vertical line u = ``x_edge`` (pixel units, centres at integers)
+    over a far one: colour box-filtered over each pixel (the near share of pixel u is
+    clip(x_edge - (u - 0.5), 0, 1)), depth of the centre ray, as a camera and the scene
+    renderer make them."""
+    u = np.arange(w, dtype=np.float64)
+    cover = np.clip(x_edge - (u - 0.5), 0.0, 1.0)
+    row = np.rint(bg + cover * (fg - bg))
+    color = np.repeat(np.tile(row, (h, 1))[..., None], 3, axis=2).astype(np.uint8)
+    depth = np.tile(np.where(u < x_edge, near, far), (h, 1)).astype(np.float32)
+    return View(color, depth, Camera(20.0, 20.0, (w - 1) / 2, (h - 1) / 2, w, h))
+
+
+@pytest.mark.parametrize("x_edge", [6.1, 6.3, 6.45, 6.55, 6.8])
+def test_upsampled_silhouette_follows_the_mixed_pixel(x_edge):
+    """The 3 x 3 subsamples of the mixed pixel take the near depth exactly where their centre
+    lies left of the true edge (the plain replicated depth would put the whole pixel on one
+    side); the rest of the image keeps its surfaces."""
+    from ibr.render.upsample import upsample_view
+
+    v = _edge_view(x_edge)
+    up = upsample_view(v, 3)
+    assert up.camera.shape == (18, 48) and up.color.shape == (18, 48, 3)
+    sub_u = (np.arange(48) - 1) / 3.0  # subsample centres in source pixel units
+    expected = np.where(sub_u < x_edge, 2.0, 4.0)
+    assert np.array_equal(up.depth[9], expected.astype(np.float32)), (up.depth[9], expected)
+
+
+def test_upsampled_depth_is_exact_on_a_tilted_plane_and_keeps_the_quantization():
+    """1/z is affine on a plane, so the subsamples of a tilted plane get its exact depth (no
+    staircase), and the view's depth quantization carries over."""
+    from ibr.base.depth import DepthQuantization, quantization_of, set_quantization
+    from ibr.render.upsample import upsample_view
+
+    h, w = 12, 20
+    cam = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h)
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    inv = 0.3 + 0.004 * u - 0.003 * v
+    view = View(np.full((h, w, 3), 90, np.uint8), (1.0 / inv).astype(np.float32), cam)
+    q = DepthQuantization.codes(0.001)
+    set_quantization(view, q)
+    up = upsample_view(view, 3)
+    assert quantization_of(up) == q
+    su, sv = np.meshgrid((np.arange(3 * w) - 1) / 3.0, (np.arange(3 * h) - 1) / 3.0)
+    exact = 1.0 / (0.3 + 0.004 * su - 0.003 * sv)
+    inner = (slice(2, -2), slice(2, -2))  # the outermost subsamples clamp at the image border
+    assert np.allclose(up.depth[inner], exact[inner], rtol=1e-5)
+
+
+def test_low_contrast_edges_are_not_split():
+    """Where the near and far colours are too alike to read a coverage from, the edge pixel
+    keeps its own depth for all its subsamples (replicated)."""
+    from ibr.render.upsample import upsample_view
+
+    up = upsample_view(_edge_view(6.3, fg=60.0, bg=40.0), 3)
+    assert np.array_equal(up.depth[9, 18:21], np.full(3, 2.0, np.float32))  # pixel 6: its centre is near

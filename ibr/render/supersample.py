@@ -4,20 +4,21 @@ A source pixel's colour is the mean over its footprint (a camera integrates; the
 are 3 x 3 box-filtered), but a renderer that maps each target pixel *centre* to one source point
 gives a silhouette pixel the colour of one side only: the jagged, up-to-a-pixel-off outlines
 that dominate the error around depth edges (on clutter at t = 0.5, 217 of the band's 13 700
-pixels hold half its squared error). With ``supersample=k`` (odd) the view is rendered into the
-same camera at k times the resolution (:meth:`Camera.resized`: the centre subsample of each
-pixel is its centre ray) and brought back with :func:`downsample_rendering`: at *edge pixels*,
-whose k x k subsamples see surfaces more than ``depth_tol`` apart, the colour is the mean of the
-subsamples (a box filter over the pixel, as the camera's); everywhere else it is the centre
-subsample, i.e. what the plain render gives there (box-filtering interiors too blurred textures:
-the room pair lost 1.1 dB over all pixels). Depth, holes and filled pixels are the centre
-subsample's, so every convention of :class:`~ibr.render.view_synthesis.Rendering` holds.
+pixels hold half its squared error). With ``supersample=k`` (odd) the sources are upsampled k
+x k with sub-pixel silhouettes (:func:`ibr.render.upsample.upsample_view`), the view is rendered
+into the same camera at k times the resolution (:meth:`Camera.resized`: the centre subsample of
+each pixel is its centre ray) and brought back with :func:`downsample_rendering`: at *edge
+pixels*, whose k x k subsamples see surfaces more than ``depth_tol`` apart, the colour is the
+mean of the subsamples (a box filter over the pixel, as the camera's); everywhere else it is
+the centre subsample (box-filtering interiors too blurred textures: the room pair lost 1.1 dB
+over all pixels). Depth, holes and filled pixels are the centre subsample's.
 
 Measured (``python benchmarks/bench_edges.py --quick``, k = 3, t = .25/.5/.75, covered pixels):
-clutter edge band 28.16 -> 29.95 dB, all covered pixels 37.07 -> 37.96 dB (after the fill, all
-pixels, 36.82 -> 37.57); room band 30.97 -> 31.34 dB; the real motorcycle pair, left -> right,
-27.55 -> 27.91 dB. It costs the render at k^2 the pixels: the 512 x 512 two-source frame 8.1 ->
-88 ms (11x; the render at 1536 x 1536 is 53 ms of it, this module's edge test and box filter 23).
+clutter edge band 28.16 -> 31.02 dB, all covered pixels 37.07 -> 39.29 dB; room band 30.97 ->
+32.21 dB, all 38.39 -> 39.92; the real motorcycle pair, left -> right, 27.55 -> 28.22 dB. The 1x
+sources rendered the same way gave 29.95 / 37.96 (clutter) and 31.34 / 38.43 (room). It costs
+the render at k^2 the pixels: the 512 x 512 two-source frame 8.1 -> 78 ms (9.4x; meshes cached),
+and meshes of k^2 the pixels, built once per source.
 """
 
 from __future__ import annotations

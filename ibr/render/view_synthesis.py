@@ -104,6 +104,19 @@ class _Source:
         self.meshes: dict = {}
         self._trust: dict = {}
         self.median_depth = None
+        self._view = weakref.ref(view)
+        self._upsampled: dict = {}
+
+    def upsampled(self, k: int) -> View:
+        """The source at k x k its resolution with sub-pixel silhouettes
+        (:func:`~ibr.render.upsample.upsample_view`), made once per factor; its meshes are
+        cached on it like any view's."""
+        v = self._upsampled.get(k)
+        if v is None:
+            from .upsample import upsample_view
+
+            v = self._upsampled[k] = upsample_view(self._view(), k)
+        return v
 
     def trust(self, mesh_key) -> np.ndarray:
         """(H, W, 2) float32 :func:`~ibr.render.composite.source_trust` of the source (mixed
@@ -413,8 +426,10 @@ def warp(
         ``baseline`` nor ``threshold``: the actual move from the source to ``camera``
         (default, :func:`lod_baseline`), or 5 % of the median depth (issue 4's default).
     supersample : {1, 3, 5}
-        Render k x k subsamples per pixel and box-filter them at depth edges (anti-aliased,
-        sub-pixel silhouettes; :mod:`ibr.render.supersample`); about k^2 the time. 1: off.
+        Upsample the source k x k with its silhouettes placed inside the mixed pixels
+        (:mod:`ibr.render.upsample`), render k x k subsamples per pixel and box-filter them at
+        depth edges (:mod:`ibr.render.supersample`): anti-aliased, sub-pixel silhouettes, about
+        k^2 the time (and a mesh of k^2 the pixels, once per source). 1: off (default).
 
     Returns
     -------
@@ -438,6 +453,7 @@ def warp(
     _check_source(view, "view")
     camera = _check_target(camera)
     mesh_options = check_mesh_options(mesh_options)
+    view = _source(view).upsampled(k) if k > 1 else view
     opts = _lod_options(view, [camera], mesh_options, lod) if method == "mesh" else {}
     cam_k = supersampled_camera(camera, k)
     comp = _render([view], cam_k, [1.0], method=method, footprint=footprint, splat=splat,
@@ -513,6 +529,8 @@ def iter_interpolate(
             f"{view_a.color.dtype} {view_a.color.shape}; convert both to one dtype and layout"
         )
     cams, ts, _ = _targets(view_a, view_b, t)
+    if k > 1:  # the sources at k x k their resolution, sub-pixel silhouettes (ibr.render.upsample)
+        view_a, view_b = _source(view_a).upsampled(k), _source(view_b).upsampled(k)
     base = check_mesh_options(mesh_options)
     # level of detail from the span of the whole call (one mesh per source for every frame)
     opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
@@ -578,9 +596,9 @@ def interpolate(
         where both sources see the same surface (default), so the clean pixel of the other
         source wins (no ghost outlines); ``False`` is issue 4's plain viewpoint blend.
     supersample : {1, 3, 5}
-        k x k subsamples per pixel, box-filtered at depth edges (:mod:`ibr.render.supersample`):
-        anti-aliased silhouettes placed to a fraction of a pixel; about k^2 the frame time
-        (the fill and the previous-frame fill run on the subsamples). 1: off (default).
+        As in :func:`warp`: sources upsampled with sub-pixel silhouettes, k x k subsamples per
+        pixel box-filtered at depth edges; about k^2 the frame time (the fill and the
+        previous-frame fill run on the subsamples). 1: off (default).
 
     Returns
     -------
