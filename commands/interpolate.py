@@ -13,7 +13,7 @@ SAMPLE_SCENE = "clutter"
 
 
 def add_arguments(parser) -> None:
-    from commands._common import finite_float, frame_count, frame_rate
+    from commands._common import finite_float, frame_count, frame_rate, number_in
 
     parser.add_argument("views", nargs="*", metavar="VIEW.json",
                         help="two view files A and B (default: the bundled sample pair)")
@@ -36,7 +36,8 @@ def add_arguments(parser) -> None:
                         help="colour reconstruction filter (default %(default)s; cubic: sharper textures, "
                              "+0.5 to +1.5 dB on the synthetic pairs, no gain on real photographs, 1.5-1.8x the "
                              "frame time)")
-    parser.add_argument("--supersample", type=int, choices=(1, 3, 5), default=1, metavar="K",
+    parser.add_argument("--supersample", type=number_in(1, 5, integer=True), choices=(1, 3, 5), default=1,
+                        metavar="K",
                         help="K x K subsamples per pixel from sources upsampled with sub-pixel silhouettes, "
                              "box-filtered at depth edges (1, 3 or 5; default 1 = off; about K^2 the frame time)")
     parser.add_argument("--composite", choices=("blend", "front"), default="blend",

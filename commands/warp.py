@@ -6,6 +6,8 @@ HELP = "render one RGB-D view from another camera (target: a view file or a bare
 
 
 def add_arguments(parser) -> None:
+    from commands._common import number_in
+
     parser.add_argument("view", metavar="VIEW.json", help="source view file (must have depth)")
     parser.add_argument("--to", required=True, metavar="CAMERA.json",
                         help="target camera: a view file (its camera; depth not needed) or a JSON camera "
@@ -19,7 +21,8 @@ def add_arguments(parser) -> None:
                         help="depth-aware background fill of the holes (default) or none")
     parser.add_argument("--interpolation", choices=("linear", "cubic"), default="linear",
                         help="color reconstruction filter (default %(default)s)")
-    parser.add_argument("--supersample", type=int, choices=(1, 3, 5), default=1, metavar="K",
+    parser.add_argument("--supersample", type=number_in(1, 5, integer=True), choices=(1, 3, 5), default=1,
+                        metavar="K",
                         help="K x K subsamples per pixel from a source upsampled with sub-pixel silhouettes, "
                              "box-filtered at depth edges (1, 3 or 5; default 1 = off; about K^2 the time)")
     parser.add_argument("--depth-out", metavar="DEPTH.exr",
