@@ -233,14 +233,17 @@ def scratch(key, shape, dtype) -> np.ndarray:
     """A reusable per-thread work array (contents undefined) for internal, short-lived results.
 
     Reusing the pages avoids the page faults of a fresh multi-megabyte allocation per frame
-    (several ms at 1920x1080). Never hand a scratch array to a caller.
+    (several ms at 1920x1080). Never hand a scratch array to a caller. One array is kept per key
+    and dtype, of the last shape asked for: a supersampled render's k^2-sized arrays are freed
+    by the next plain one instead of being held for the life of the process.
     """
     store = getattr(_scratch_local, "arrays", None)
     if store is None:
         store = _scratch_local.arrays = {}
-    k = (key, tuple(shape), np.dtype(dtype).str)
+    k = (key, np.dtype(dtype).str)
     a = store.get(k)
-    if a is None:
+    if a is None or a.shape != tuple(shape):
+        store.pop(k, None)  # free the old pages before the new allocation
         a = store[k] = np.empty(shape, dtype)
     return a
 

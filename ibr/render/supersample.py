@@ -11,7 +11,10 @@ each pixel is its centre ray) and brought back with :func:`downsample_rendering`
 pixels*, whose k x k subsamples see surfaces more than ``depth_tol`` apart, the colour is the
 mean of the subsamples (a box filter over the pixel, as the camera's); everywhere else it is
 the centre subsample (box-filtering interiors too blurred textures: the room pair lost 1.1 dB
-over all pixels). Depth, holes and filled pixels are the centre subsample's.
+over all pixels). Depth, holes and filled pixels are the centre subsample's. Unlike the plain
+render, a supersampled one does not give a source back exactly at its own pose: its edge pixels
+take the mean of bicubic subsamples instead of the recorded mixed colour (clutter a: 821 pixels
+differ, by at most 22 levels).
 
 Measured (``python benchmarks/bench_edges.py --quick``, k = 3, t = .25/.5/.75, covered pixels):
 clutter edge band 28.16 -> 31.02 dB, all covered pixels 37.07 -> 39.29 dB; room band 30.97 ->
@@ -59,6 +62,9 @@ def edge_pixels(depth_k: np.ndarray, known_k: np.ndarray, k: int, depth_tol: flo
     known_k : (k H, k W) bool
         Subsamples with a colour (not an unfilled hole).
     """
+    _check_multiple(np.shape(depth_k), k)
+    if np.shape(known_k) != np.shape(depth_k):
+        raise ValueError(f"known_k: expected shape {np.shape(depth_k)} (depth_k's), got {np.shape(known_k)}")
     # k^2 strided planes of (H, W), reduced element-wise: a reduction over the axes of a
     # (H, k, W, k) view took 30x as long (150 ms at 1536 x 1536, #13)
     planes = _subsample_planes(np.asarray(depth_k), k)
@@ -70,6 +76,11 @@ def edge_pixels(depth_k: np.ndarray, known_k: np.ndarray, k: int, depth_tol: flo
         step = zmax > zmin * (1.0 + depth_tol)  # False where every subsample is NaN
     partial = np.isfinite(zmax) & ~all_finite
     return known & (step | partial)
+
+
+def _check_multiple(shape, k: int) -> None:
+    if len(shape) < 2 or shape[0] % k or shape[1] % k or not shape[0] or not shape[1]:
+        raise ValueError(f"supersampled arrays: expected a shape of multiples of k = {k}, got {tuple(shape)}")
 
 
 def _subsample_planes(a: np.ndarray, k: int) -> list:
@@ -100,13 +111,18 @@ def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int, depth_tol:
         Colour: the subsamples' mean at edge pixels, else the centre subsample; depth, holes
         and filled: the centre subsample's.
     """
+    k = check_supersample(k)
     c = k // 2
     color_k = np.asarray(color_k)
+    for name, a in (("depth_k", depth_k), ("holes_k", holes_k), ("filled_k", filled_k)):
+        if np.shape(a) != color_k.shape[:2]:
+            raise ValueError(f"{name}: expected shape {color_k.shape[:2]} (color_k's), got {np.shape(a)}")
+    _check_multiple(color_k.shape[:2], k)
     centre = (slice(c, None, k), slice(c, None, k))
-    color = np.ascontiguousarray(color_k[centre])
-    depth = np.ascontiguousarray(depth_k[centre])
-    holes = np.ascontiguousarray(holes_k[centre])
-    filled = np.ascontiguousarray(filled_k[centre])
+    color = np.array(color_k[centre], order="C")  # copies: the caller's arrays stay as they are
+    depth = np.array(depth_k[centre], order="C")
+    holes = np.array(holes_k[centre], order="C")
+    filled = np.array(filled_k[centre], order="C")
     if k == 1:
         return color, depth, holes, filled
     edge = edge_pixels(depth_k, ~holes_k | filled_k, k, depth_tol)

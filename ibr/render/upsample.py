@@ -44,14 +44,23 @@ MIN_CONTRAST = 60.0 / 255.0
 _NEIGHBOURS = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
 
 
-def depth_edge_pixels(depth: np.ndarray, rel: float = EDGE_REL) -> np.ndarray:
+def depth_edge_pixels(depth: np.ndarray, rel: float = EDGE_REL, quantization=None) -> np.ndarray:
     """(H, W) bool: valid pixels with a 4-neighbour whose planar depth differs by more than
-    ``rel`` of the nearer one (both pixels of every such pair)."""
+    ``rel`` of the nearer one (both pixels of every such pair) and, for quantized depth
+    (a :class:`~ibr.base.depth.DepthQuantization`), by more than
+    :data:`~ibr.render.composite.QUANT_STEP_CODES` codes: the staircase of a smooth surface in
+    coarse codes is no silhouette."""
     z = np.asarray(depth, np.float64)
     edge = np.zeros(z.shape, bool)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore"):
         dh = np.abs(z[:, 1:] - z[:, :-1]) > rel * np.fmin(z[:, 1:], z[:, :-1])
         dv = np.abs(z[1:] - z[:-1]) > rel * np.fmin(z[1:], z[:-1])
+        if quantization is not None:
+            from .composite import QUANT_STEP_CODES
+
+            q = 1.0 / z
+            dh &= np.abs(q[:, 1:] - q[:, :-1]) > QUANT_STEP_CODES * quantization.inv_step(np.fmax(q[:, 1:], q[:, :-1]))
+            dv &= np.abs(q[1:] - q[:-1]) > QUANT_STEP_CODES * quantization.inv_step(np.fmax(q[1:], q[:-1]))
     edge[:, 1:] |= dh
     edge[:, :-1] |= dh
     edge[1:] |= dv
@@ -64,26 +73,30 @@ def upsample_view(view: View, k: int) -> View:
     bicubic colour, depth interpolated in 1/z within surfaces and silhouettes placed inside the
     depth-edge pixels by their colours (module docstring). ``k`` = 1 returns ``view``. The
     depth's quantization (:func:`~ibr.base.depth.quantization_of`) carries over."""
+    from .supersample import check_supersample
+
+    k = check_supersample(k)
+    if not isinstance(view, View) or view.depth is None:
+        raise ValueError("view: expected a View with depth")
     if k == 1:
         return view
     h, w = view.depth.shape
     camera = view.camera.resized(w * k, h * k)
     color = cv2.resize(view.color, (w * k, h * k), interpolation=cv2.INTER_CUBIC)
     depth = _smooth_depth(view.depth, k)
-    _place_silhouettes(depth, view.depth, _unit_color(view.color), k)
-    out = View(color, depth, camera, view.name)
     q = quantization_of(view)
-    if q is not None:
-        set_quantization(out, q)
-    return out
+    _place_silhouettes(depth, view.depth, _unit_color(view.color), k, q)
+    return set_quantization(View(color, depth, camera, view.name), q)
 
 
 def _unit_color(color: np.ndarray) -> np.ndarray:
-    """(H, W, C) float64 colour in [0, 1] of its dtype's scale."""
+    """(H, W, C) float64 colour in [0, 1] of its dtype's scale, without an alpha channel (the
+    coverage is read from the colour channels)."""
     c = np.asarray(color)
     scale = float(np.iinfo(c.dtype).max) if np.issubdtype(c.dtype, np.integer) else 1.0
     c = c.astype(np.float64) / scale
-    return c if c.ndim == 3 else c[..., None]
+    c = c if c.ndim == 3 else c[..., None]
+    return c[..., :3] if c.shape[2] == 4 else c
 
 
 def _smooth_depth(depth: np.ndarray, k: int) -> np.ndarray:
@@ -99,11 +112,11 @@ def _smooth_depth(depth: np.ndarray, k: int) -> np.ndarray:
     return np.where(same, smooth, rep).astype(np.float32)
 
 
-def _place_silhouettes(depth_k: np.ndarray, depth: np.ndarray, color: np.ndarray, k: int) -> None:
-    """Split the subsamples of every depth-edge pixel between its neighbourhood's nearer and
-    farther surface (module docstring), in place in ``depth_k``."""
+def _place_silhouettes(depth_k: np.ndarray, depth: np.ndarray, color: np.ndarray, k: int, quantization) -> None:
+    """Split the subsamples of every depth-edge pixel (:func:`depth_edge_pixels`) between its
+    neighbourhood's nearer and farther surface (module docstring), in place in ``depth_k``."""
     z = np.asarray(depth, np.float64)
-    edge = depth_edge_pixels(z)
+    edge = depth_edge_pixels(z, quantization=quantization)
     py, px = np.nonzero(edge)
     if py.size == 0:
         return

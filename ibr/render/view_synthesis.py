@@ -23,7 +23,7 @@ import numpy as np
 
 from ..base.validate import check_choice, check_finite_scalar, check_mesh_options, check_positive
 from ..base.camera import Camera, interpolate_cameras
-from ..base.depth import quantization_of
+from ..base.depth import quantization_of, set_quantization
 from .composite import (COMPOSITE_MODES, Composite, composite, mixed_pixels, pack_trust, remap_composite,
                         rgbt_source, rim_beside_holes, sample_composite, source_trust, viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_pullpush_inplace, parallax_axis
@@ -63,7 +63,9 @@ class Rendering:
     holes : (H, W) bool
         Pixels that no source covered (before filling): every value there is invented.
     filled : (H, W) bool
-        The subset of ``holes`` that the fill wrote (previous frame or background fill).
+        Pixels whose colour the fill wrote (previous frame or background fill): the holes it
+        filled and, beside them, covered pixels sampled from a source's background rim (their
+        colour mixed in the foreground; :attr:`~ibr.render.composite.Composite.replace`).
     camera : Camera
         The target camera.
     t : float or None
@@ -111,11 +113,13 @@ class _Source:
         """The source at k x k its resolution with sub-pixel silhouettes
         (:func:`~ibr.render.upsample.upsample_view`), made once per factor; its meshes are
         cached on it like any view's."""
+        view = self._view()
         v = self._upsampled.get(k)
         if v is None:
             from .upsample import upsample_view
 
-            v = self._upsampled[k] = upsample_view(self._view(), k)
+            v = self._upsampled[k] = upsample_view(view, k)
+        set_quantization(v, quantization_of(view))  # as the view's is now (it may have been set since)
         return v
 
     def trust(self, mesh_key) -> np.ndarray:
