@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import re
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy import ndimage
 
 import cli
 from ibr.base.camera import Camera
@@ -16,6 +17,9 @@ from ibr.render.supersample import check_supersample, downsample_rendering, edge
 from ibr.render.view_synthesis import interpolate, warp
 from samples import DATA_DIR
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the checkout, for its benchmarks
+from benchmarks.bench_edges import edge_band  # noqa: E402  (issue 11's band: +-1 px of depth edges)
+
 TS = (0.25, 0.5, 0.75)
 
 
@@ -23,20 +27,6 @@ def psnr(a, b, mask=None) -> float:
     d = (np.asarray(a, np.float64) - np.asarray(b, np.float64)) ** 2
     d = d if mask is None else d[mask]
     return float(10 * np.log10(255.0**2 / d.mean()))
-
-
-def edge_band(depth, rel=0.02):
-    """Pixels within 1 px (8-connected) of a depth step of more than ``rel`` (benchmarks' band)."""
-    z = np.asarray(depth, np.float64)
-    e = np.zeros(z.shape, bool)
-    with np.errstate(invalid="ignore"):
-        dh = (np.abs(z[:, 1:] - z[:, :-1]) > rel * np.fmin(z[:, 1:], z[:, :-1])) | (np.isnan(z[:, 1:]) != np.isnan(z[:, :-1]))
-        dv = (np.abs(z[1:] - z[:-1]) > rel * np.fmin(z[1:], z[:-1])) | (np.isnan(z[1:]) != np.isnan(z[:-1]))
-    e[:, 1:] |= dh
-    e[:, :-1] |= dh
-    e[1:] |= dv
-    e[:-1] |= dv
-    return ndimage.binary_dilation(e, np.ones((3, 3), bool))
 
 
 @pytest.fixture(scope="module")
