@@ -475,3 +475,45 @@ def test_cli_stereo(tmp_path):
     assert main(["stereo", str(tmp_path / "missing.json"), "-o", str(tmp_path / "x.png")]) == 1
     assert main(["stereo", str(src), "--e", "0.1", "-o", str(tmp_path / "x.png")]) == 1
     assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("name, gain", [("room", 0.8), ("clutter", 0.3), ("grazing", 1.5)])
+def test_supersampled_mesh_pairs_are_closer_to_ray_traced_eyes(name, gain):
+    """Method 1 with ``supersample=3`` (view upsampled with sub-pixel silhouettes, eyes rendered
+    at 3x and box-filtered at depth edges) against ray-traced eyes outside disocclusions:
+    measured room 41.02 -> 42.19, clutter 37.17 -> 37.75, grazing 48.57 -> 51.17 dB; same size,
+    dtype and (within 1 % of the frame) the same holes."""
+    scene = synth.make_scene(name)
+    cam, _ = synth.scene_cameras(name, width=256, height=192)
+    view = synth.render(scene, cam, supersample=3)
+    e, f = auto_stereo(view.depth)
+    plain = stereo_pair(view, e=e, f=f, method="mesh")
+    fine = stereo_pair(view, e=e, f=f, method="mesh", supersample=3)
+    scores = []
+    for p in (plain, fine):
+        s = []
+        for img, holes, ecam in ((p.left, p.left_holes, p.left_camera), (p.right, p.right_holes, p.right_camera)):
+            gt = synth.render(scene, ecam, supersample=3)
+            ok = ~holes & np.isfinite(gt.depth)
+            s.append(10 * np.log10(1 / np.mean((img[ok] - gt.color[ok]) ** 2)))
+        scores.append(np.mean(s))
+    assert scores[1] > scores[0] + gain, scores
+    assert fine.left.shape == plain.left.shape and fine.left.dtype == plain.left.dtype
+    assert abs(fine.left_holes.mean() - plain.left_holes.mean()) < 0.01
+
+
+def test_supersample_needs_the_mesh_method(tmp_path, capsys):
+    """Library and CLI refuse ``supersample`` without the quad mesh, with the same message."""
+    view = _plane_view(slope=0.002)
+    for method in ("pixel", "splat"):
+        with pytest.raises(ValueError, match="supersample: 3 needs method='mesh'"):
+            stereo_pair(view, e=0.1, f=4.0, method=method, supersample=3)
+    with pytest.raises(ValueError, match="supersample"):
+        stereo_pair(view, e=0.1, f=4.0, method="mesh", supersample=2)
+    import cli
+    from samples import DATA_DIR
+
+    assert cli.main(["stereo", str(DATA_DIR / "clutter_a.json"), "--auto", "--supersample", "3",
+                     "-o", str(tmp_path / "s.png")]) == 1
+    assert "supersample: 3 needs method='mesh'" in capsys.readouterr().err
+    assert not (tmp_path / "s.png").exists()
