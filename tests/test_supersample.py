@@ -273,3 +273,23 @@ def test_low_contrast_edges_are_not_split():
 
     up = upsample_view(_edge_view(6.3, fg=60.0, bg=40.0), 3)
     assert np.array_equal(up.depth[9, 18:21], np.full(3, 2.0, np.float32))  # pixel 6: its centre is near
+
+
+def test_invalid_depth_stays_where_it_is():
+    """NaN (and inf) depth pixels: their subsamples stay invalid and no valid subsample takes a
+    NaN; at the source's own pose the supersampled render's holes are exactly those pixels."""
+    from ibr.render.upsample import upsample_view
+
+    h, w = 12, 16
+    z = np.full((h, w), 3.0, np.float32)
+    z[:, 8:] = 5.0
+    z[3:6, 2:5] = np.nan
+    z[0, 15] = np.inf
+    c = np.full((h, w, 3), 100, np.uint8)
+    c[:, 8:] = 200
+    v = View(c, z, Camera(20.0, 20.0, (w - 1) / 2, (h - 1) / 2, w, h))
+    up = upsample_view(v, 3)
+    bad_k = np.repeat(np.repeat(~np.isfinite(z), 3, 0), 3, 1)
+    assert np.array_equal(~np.isfinite(up.depth), bad_k)
+    r = warp(v, v.camera, supersample=3, fill="none")
+    assert np.array_equal(r.holes, ~np.isfinite(z))
