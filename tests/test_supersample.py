@@ -293,3 +293,31 @@ def test_invalid_depth_stays_where_it_is():
     assert np.array_equal(~np.isfinite(up.depth), bad_k)
     r = warp(v, v.camera, supersample=3, fill="none")
     assert np.array_equal(r.holes, ~np.isfinite(z))
+
+
+def test_the_helpers_refuse_bad_input_by_name():
+    """Each public helper of the supersampling refuses wrong types, ranks, shapes and values with
+    an error naming the argument."""
+    from ibr.render.upsample import depth_edge_pixels, upsample_view
+
+    cam = Camera(20.0, 20.0, 7.5, 5.5, 16, 12)
+    z3 = np.ones((6, 6), np.float32)
+    ok = np.ones((6, 6), bool)
+    cases = [
+        (lambda: supersampled_camera("cam", 3), TypeError, "camera"),
+        (lambda: supersampled_camera(cam, 2), ValueError, "supersample"),
+        (lambda: edge_pixels(z3, ok, 3, 0.0), ValueError, "depth_tol"),
+        (lambda: edge_pixels(z3[0], ok, 3, 0.02), ValueError, "depth_k"),
+        (lambda: edge_pixels(z3, ok[:3], 3, 0.02), ValueError, "known_k"),
+        (lambda: edge_pixels(np.ones((5, 6), np.float32), np.ones((5, 6), bool), 3, 0.02), ValueError, "multiples"),
+        (lambda: downsample_rendering(np.zeros((6, 6, 3), np.uint8), z3, ~ok, ~ok, 3, depth_tol=-1), ValueError, "depth_tol"),
+        (lambda: downsample_rendering(np.zeros((6, 6, 3), bool), z3, ~ok, ~ok, 3), ValueError, "color_k"),
+        (lambda: depth_edge_pixels(np.ones(5, np.float32)), ValueError, "depth"),
+        (lambda: depth_edge_pixels(z3, rel=float("nan")), ValueError, "rel"),
+        (lambda: depth_edge_pixels(z3, quantization=0.1), TypeError, "quantization"),
+        (lambda: upsample_view(View(np.zeros((12, 16, 3), np.uint8), None, cam), 3), ValueError, "view"),
+        (lambda: upsample_view(_edge_view(6.3), 4), ValueError, "supersample"),
+    ]
+    for call, exc, name in cases:
+        with pytest.raises(exc, match=name):
+            call()

@@ -30,6 +30,8 @@ import functools
 
 import numpy as np
 
+from ..base.validate import check_array, check_positive
+
 __all__ = ["SUPERSAMPLES", "check_supersample", "downsample_rendering", "edge_pixels", "supersampled_camera"]
 
 #: Allowed factors: odd, so that each pixel's centre ray is one of its subsamples.
@@ -47,6 +49,11 @@ def check_supersample(value) -> int:
 
 def supersampled_camera(camera, k: int):
     """``camera`` at k times its width and height (the same view; pixel-centre aware)."""
+    from ..base.camera import Camera
+
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera: expected a Camera, got {type(camera).__name__}")
+    k = check_supersample(k)
     return camera if k == 1 else camera.resized(camera.width * k, camera.height * k)
 
 
@@ -62,7 +69,10 @@ def edge_pixels(depth_k: np.ndarray, known_k: np.ndarray, k: int, depth_tol: flo
     known_k : (k H, k W) bool
         Subsamples with a colour (not an unfilled hole).
     """
-    _check_multiple(np.shape(depth_k), k)
+    k = check_supersample(k)
+    depth_tol = check_positive("depth_tol", depth_tol)
+    depth_k = check_array("depth_k", depth_k, ndim=2, dtype_kind="f")
+    _check_multiple(depth_k.shape, k)
     if np.shape(known_k) != np.shape(depth_k):
         raise ValueError(f"known_k: expected shape {np.shape(depth_k)} (depth_k's), got {np.shape(known_k)}")
     # k^2 strided planes of (H, W), reduced element-wise: a reduction over the axes of a
@@ -112,8 +122,9 @@ def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int, depth_tol:
         and filled: the centre subsample's.
     """
     k = check_supersample(k)
+    depth_tol = check_positive("depth_tol", depth_tol)
     c = k // 2
-    color_k = np.asarray(color_k)
+    color_k = check_array("color_k", color_k, ndim=(2, 3), dtype_kind="uif")
     for name, a in (("depth_k", depth_k), ("holes_k", holes_k), ("filled_k", filled_k)):
         if np.shape(a) != color_k.shape[:2]:
             raise ValueError(f"{name}: expected shape {color_k.shape[:2]} (color_k's), got {np.shape(a)}")

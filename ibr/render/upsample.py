@@ -32,6 +32,7 @@ import cv2
 import numpy as np
 
 from ..base.depth import quantization_of, set_quantization
+from ..base.validate import check_array, check_positive
 from ..base.view import View
 
 __all__ = ["MIN_CONTRAST", "depth_edge_pixels", "upsample_view"]
@@ -50,7 +51,12 @@ def depth_edge_pixels(depth: np.ndarray, rel: float = EDGE_REL, quantization=Non
     (a :class:`~ibr.base.depth.DepthQuantization`), by more than
     :data:`~ibr.render.composite.QUANT_STEP_CODES` codes: the staircase of a smooth surface in
     coarse codes is no silhouette."""
-    z = np.asarray(depth, np.float64)
+    from ..base.depth import DepthQuantization
+
+    z = check_array("depth", depth, ndim=2, dtype_kind="f").astype(np.float64)
+    rel = check_positive("rel", rel)
+    if quantization is not None and not isinstance(quantization, DepthQuantization):
+        raise TypeError(f"quantization: expected a DepthQuantization or None, got {type(quantization).__name__}")
     edge = np.zeros(z.shape, bool)
     with np.errstate(invalid="ignore", divide="ignore"):
         dh = np.abs(z[:, 1:] - z[:, :-1]) > rel * np.fmin(z[:, 1:], z[:, :-1])
