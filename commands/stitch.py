@@ -114,11 +114,11 @@ def _stitch_frame(args, views, panorama, tick):
         return packed, depth, holes, 1 - np.mean([e.holes.mean() for e in pair.eyes])
     center = args.center if args.center is not None else np.mean([v.camera.position for v in views], axis=0)
     res = stitch_rgbd(views, equirect_camera(args.width, center=center), progress=tick)
-    packed, depth, holes = res.color, res.depth, res.holes
-    if args.fill == "background" and holes.any():
-        from panorama.stitch.fill import fill_panorama
+    if args.fill == "background":
+        from panorama.stitch.fill import fill_stitched
 
-        packed, depth, _ = fill_panorama(packed, depth, holes)
+        res = fill_stitched(res)
+    packed, depth, holes = res.color, res.depth, res.holes
     if args.layout == "cube":
         s = args.width // 4
         packed = _strip(equirect_to_cubemap(packed, s, layout="dict"))

@@ -25,7 +25,7 @@ import numpy as np
 
 from ibr.base.validate import check_positive
 
-__all__ = ["CAP_PX_PER_WIDTH", "fill_panorama"]
+__all__ = ["CAP_PX_PER_WIDTH", "fill_panorama", "fill_stitched"]
 
 #: Hole pixels farther than ``cap_px`` from any seen pixel blend into the smooth fill, fully at
 #: twice that distance; ``cap_px`` defaults to this share of the image width (8 px at 1024 wide,
@@ -116,3 +116,15 @@ def _smooth_fill(color: np.ndarray, holes: np.ndarray) -> np.ndarray:
         own = np.clip(4.0 * wt, 0.0, 1.0)[..., None]
         val = own * (s / np.maximum(wt, 1e-6)[..., None]) + (1.0 - own) * up
     return val.astype(np.float32)
+
+
+def fill_stitched(stitched):
+    """A :class:`~panorama.stitch.rgbd.Stitched` panorama with its holes filled by
+    :func:`fill_panorama` (colour and depth; ``holes`` still marks them); returned as is when
+    it has none. The one fill of ``ibr stitch`` and of the ODS eyes (``fill="background"``)."""
+    from .rgbd import Stitched
+
+    if not stitched.holes.any():
+        return stitched
+    color, depth, _ = fill_panorama(stitched.color, stitched.depth, stitched.holes)
+    return Stitched(color, depth, stitched.holes, stitched.winner, stitched.camera)

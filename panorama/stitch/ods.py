@@ -23,7 +23,7 @@ import numpy as np
 from ibr.base.ray_camera import SphericalCamera
 from ibr.base.validate import check_choice, check_finite_scalar
 from ibr.base.view import View
-from .fill import fill_panorama
+from .fill import fill_stitched
 
 from ..convert import equirect_to_cubemap
 from ..directions import FACE_NAMES
@@ -63,13 +63,6 @@ def _check_ipd(ipd, fade_start_deg, fade_end_deg):
     return ipd
 
 
-def _fill(eye: Stitched) -> Stitched:
-    if not eye.holes.any():
-        return eye
-    col, depth, _ = fill_panorama(eye.color, eye.depth, eye.holes)
-    return Stitched(col, depth, eye.holes, eye.winner, eye.camera)
-
-
 def ods_from_views(views, width: int, *, ipd: float = 0.064, fade_start_deg: float = 60.0,
                    fade_end_deg: float = 80.0, center=None, fill: str = "none", mesh_options: dict | None = None,
                    progress=None, **blend_options) -> OdsPair:
@@ -102,7 +95,7 @@ def ods_from_views(views, width: int, *, ipd: float = 0.064, fade_start_deg: flo
                                         center=center)):
         step = None if progress is None else (lambda i, k=k: progress(k * len(views) + i))
         eye = stitch_rgbd(views, cam, mesh_options=mesh_options, progress=step, **blend_options)
-        eyes.append(_fill(eye) if fill == "background" else eye)
+        eyes.append(fill_stitched(eye) if fill == "background" else eye)
     return OdsPair(*eyes)
 
 
