@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ibr.base.validate import check_positive
+from ibr.base.validate import check_number
 
 __all__ = ["CAP_PX_PER_WIDTH", "fill_panorama", "fill_stitched"]
 
@@ -62,9 +62,7 @@ def fill_panorama(color, depth, holes, *, cap_px: float | None = None):
     from ibr.render.fill import fill_background
 
     if cap_px is not None:
-        if isinstance(cap_px, (bool, str)):
-            raise TypeError(f"cap_px: expected a real number of pixels, got {cap_px!r}")
-        cap_px = check_positive("cap_px", cap_px)
+        cap_px = float(check_number("cap_px", cap_px, minimum=0, exclusive_minimum=True))
     color = np.asarray(color)
     flat = color.ndim == 2
     out, z, filled = fill_background(color[..., None] if flat else color, depth, holes)
