@@ -99,7 +99,7 @@ def _smooth_fill(color: np.ndarray, holes: np.ndarray) -> np.ndarray:
     weight = (~holes).astype(np.float32)
     mean = color.reshape(-1, color.shape[2]).sum(0) / max(float(weight.sum()), 1.0)
     levels = []
-    s, wt = color * weight[..., None], weight
+    s, wt = color, weight  # the colour is already 0 at the holes: it is the weighted colour
     while min(s.shape[:2]) > 2:
         levels.append((s, wt))
         s, wt = cv2.pyrDown(s), cv2.pyrDown(wt)
