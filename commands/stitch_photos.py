@@ -90,6 +90,7 @@ def run(args) -> int:
     import numpy as np
 
     import panorama
+    from commands.interpolate import _to_float
     from ibr.io import read_image, write_image
     from ibr.io.outputs import IMAGE_EXTS, JSON_EXTS, OutputPlan
     from panorama.directions import FACE_FILE_NAMES
@@ -130,7 +131,7 @@ def run(args) -> int:
         if out.suffix.lower() in (".jpg", ".jpeg") or (out.suffix.lower() == ".png" and pano.dtype.kind == "f"):
             pano = to_uint8(pano)
         elif out.suffix.lower() == ".exr" and pano.dtype.kind in "ui":  # EXR stores floats: [0, 1] units
-            pano = (pano.astype(np.float32) / np.float32(np.iinfo(pano.dtype).max)).astype(np.float32)
+            pano = _to_float(pano)
         write_image(plan.stage(target), pano)
         if cube is not None:
             size = args.face_size or int(np.ceil(pano.shape[1] / np.pi))
