@@ -299,14 +299,15 @@ def predistort(image, lens, *, center_px=None, scale_px: float | None = None,
     if img.ndim != 3 or img.shape[2] < 3:
         raise ValueError(f"image: per-channel lenses need an (H, W, 3) image, got shape {img.shape}")
     out = np.empty_like(img)
+    green = None
     for c, ln in enumerate(lenses):
         mx, my = distortion_maps(w, h, ln, center_px=center_px, scale_px=scale_px,
                                  inverse=inverse, method=method)
         out[..., c] = _remap(np.ascontiguousarray(img[..., c]), mx, my)
+        if c == 1:
+            green = mx, my
     if img.shape[2] > 3:  # alpha (and any further channel) moves with the green, reference lens
-        mx, my = distortion_maps(w, h, lenses[1], center_px=center_px, scale_px=scale_px,
-                                 inverse=inverse, method=method)
-        extra = _remap(np.ascontiguousarray(img[..., 3:]), mx, my)
+        extra = _remap(np.ascontiguousarray(img[..., 3:]), *green)
         out[..., 3:] = extra.reshape(h, w, -1)
     return out
 
