@@ -185,8 +185,7 @@ def timewarp(view: View, dst: Camera, *, mode: str = "auto", atol: float = 1e-9)
     """
     if not isinstance(view, View):
         raise TypeError(f"view: expected a View, got {type(view).__name__}")
-    _check_camera("dst", dst)
-    mode = timewarp_mode(view.camera, dst, mode=mode, atol=atol)
+    mode = timewarp_mode(view.camera, dst, mode=mode, atol=atol)  # checks dst
     if mode == "rotation":
         return warp_rotation(view.color, view.camera, dst, ignore_translation=True)
     view.require_depth("a depth time-warp")
