@@ -87,12 +87,18 @@ def run(args) -> int:
             raise ValueError(f"--margin: expected 0 <= margin < half the view size, got {m}")
         display = replace(cam, cx=cam.cx - m, cy=cam.cy - m, width=cam.width - 2 * m, height=cam.height - 2 * m)
         cams = load_cameras(args.poses, display)
-        moved = [i for i, c in enumerate(cams) if timewarp_mode(view.camera, c, mode=args.mode) == "depth"]
-        if moved and view.depth is None:  # found before any frame is warped, not at the first moved pose
-            raise ValueError(f"VIEW: {args.view}: pose {moved[0]} of --poses "
-                             + ("moves the head: " if args.mode == "auto" else "(--mode depth): ")
-                             + "a depth time-warp needs depth, but the view has none"
-                             + ("; give a view with depth or --mode rotation" if args.mode == "auto" else ""))
+        if view.depth is None:  # a pose that needs depth is found before any frame is warped
+            moved = next((i for i, c in enumerate(cams) if timewarp_mode(view.camera, c, mode=args.mode) == "depth"),
+                         None)
+            if moved is not None:
+                try:
+                    view.require_depth("a depth time-warp")
+                except ValueError as exc:  # the library's words, without its "view 'name': "
+                    raise ValueError(f"VIEW: {args.view}: pose {moved} of --poses "
+                                     + ("moves the head: " if args.mode == "auto" else "(--mode depth): ")
+                                     + str(exc).removeprefix(f"view {view.name!r}: ")
+                                     + ("; give a view with depth or --mode rotation" if args.mode == "auto" else "")
+                                     ) from None
         for i, c in progress(enumerate(cams), len(cams), "timewarp"):
             fr = timewarp(view, c, mode=args.mode)
             path = plan.stage(out, f"frame_{i:04d}.png")
