@@ -276,6 +276,14 @@ def _seam_finder(seam: str):
 
 
 # ----------------------------------------------------------------------------- main
+def check_photo_index(name: str, value, n: int) -> None:
+    """``value`` is None or the index of one of ``n`` photos (an integer, not a bool), else a
+    ValueError naming ``name``."""
+    if value is not None and (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer))
+                              or not 0 <= value < n):
+        raise ValueError(f"{name}: expected a photo index 0..{n - 1}, got {value!r}")
+
+
 def compose_equirect(images, cameras, width: int, *, masks=None, exposure: str = "gain",
                      exposure_reference: int | None = None, seam: str = "gc_color",
                      bands: int | None = None, seam_megapix: float = 0.1, fill=0,
@@ -330,9 +338,7 @@ def compose_equirect(images, cameras, width: int, *, masks=None, exposure: str =
         raise ValueError(f"cameras: expected one camera per photo ({len(images)}), got {len(cameras)}")
     if masks is not None and len(masks) != len(images):
         raise ValueError(f"masks: expected one mask (or None) per photo ({len(images)}), got {len(masks)}")
-    if exposure_reference is not None and not 0 <= int(exposure_reference) < len(images):
-        raise ValueError(f"exposure_reference: expected a photo index 0..{len(images) - 1}, "
-                         f"got {exposure_reference!r}")
+    check_photo_index("exposure_reference", exposure_reference, len(images))
     out_dtype = np.dtype(np.asarray(images[0]).dtype)
     if out_dtype.kind == "f":
         out_dtype = np.dtype(np.float32)

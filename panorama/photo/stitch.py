@@ -22,7 +22,7 @@ import numpy as np
 from ibr.base.camera import Camera
 from ibr.base.validate import check_choice, check_image
 
-from .compose import EXPOSURES, SEAMS, compose_equirect
+from .compose import EXPOSURES, SEAMS, check_photo_index, compose_equirect
 from .estimate import estimate_rotations, yaw_pitch_roll
 from .features import (DETECTORS, KEYPOINT_BIAS, detect, duplicates, match, pair_data, registration_images,
                        rotation_misfit)
@@ -217,9 +217,7 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
     images, names, focal_px = _check_inputs(images, names, masks, focal_px)
     n = len(images)
     for arg, value in (("reference", reference), ("exposure_reference", exposure_reference)):
-        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer))
-                                  or not 0 <= value < n):
-            raise ValueError(f"{arg}: expected a photo index 0..{n - 1}, got {value!r}")
+        check_photo_index(arg, value, n)
     report = StitchReport(images=[ImageReport(k, names[k]) for k in range(n)])
     secs = report.seconds
 
