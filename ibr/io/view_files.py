@@ -159,11 +159,12 @@ def _encode_depth(z: np.ndarray, encoding: str, p: dict, camera: Camera) -> np.n
                              f"[{nf['near']}, {nf['far']}] and cannot be stored as {encoding!r}")
     if encoding in _WINDOW_RANGES:
         stored = _WINDOW_ENCODE[encoding](z, **nf).astype(np.float32)
-        with np.errstate(invalid="ignore"):  # at the far plane (to float precision) or stored as its value
-            at_far = valid & (_at_far(stored, encoding) | (z >= nf["far"] * (1 - 1e-6)))
-        if p.get("far_is_empty", False) and np.any(at_far):
-            raise ValueError(f"depth: valid pixels lie at the far plane, whose {encoding} value reads back as "
-                             "empty with far_is_empty=true; move far out or set far_is_empty=false")
+        if p.get("far_is_empty", False):
+            with np.errstate(invalid="ignore"):  # at the far plane (to float precision) or stored as its value
+                at_far = valid & (_at_far(stored, encoding) | (z >= nf["far"] * (1 - 1e-6)))
+            if np.any(at_far):
+                raise ValueError(f"depth: valid pixels lie at the far plane, whose {encoding} value reads back "
+                                 "as empty with far_is_empty=true; move far out or set far_is_empty=false")
         return stored
     bits = _FIXED_BITS[encoding]
     if not p.get("far_is_empty", True) and not valid.all():
