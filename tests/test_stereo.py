@@ -13,7 +13,7 @@ from ibr.stereo._pair_kernels import scanline_warp, scanline_warp_reference
 from ibr.base.camera import Camera, gl_frustum_from_projection
 from ibr.base.depth import window_from_z
 from ibr.stereo.stereo_camera import StereoCamera, auto_stereo, comfort, interaxial_for_parallax, max_interaxial, max_interaxial_for_range, parallax_angle_deg, parallax_px, parallax_scene
-from ibr.render.fill import fill_background_rows
+from ibr.render.fill import fill_background_rows, fill_horizontal_parallax
 from ibr.stereo.pair import DUBOIS_RED_CYAN_LEFT, DUBOIS_RED_CYAN_RIGHT, anaglyph, dubois_anaglyph, map_pixels, pack_stereo, stereo_cameras, stereo_pair, stereo_pair_from_zbuffer
 from ibr.base.view import View
 
@@ -355,6 +355,74 @@ def test_stereo_pair_dtype_and_splat():
     # a fronto-parallel plane at z = f has zero parallax: both eyes see the source (integer copy)
     np.testing.assert_array_equal(sp.left, view.color)
     np.testing.assert_array_equal(sp.right, view.color)
+
+
+
+def test_horizontal_parallax_fill_is_the_row_fill_smoothed_across_rows():
+    """Each hole pixel: the row fill (deeper row neighbour) smoothed across rows by the binomial
+    [1 8 28 56 70 56 28 8 1] / 256 (clamped at the border, over rows that hold colour); covered
+    pixels untouched. Rim colours copied into alternate rows (the streaks) average out exactly:
+    the taps' alternating sum is 0."""
+    rng = np.random.default_rng(7)
+    h, w = 12, 20
+    color = rng.uniform(0, 1, (h, w, 3)).astype(np.float32)
+    depth = rng.uniform(1, 5, (h, w)).astype(np.float32)
+    cov = rng.uniform(size=(h, w)) > 0.3
+    cov[5] = False  # a row without cover is not filled and lends no colour to its neighbours
+    rows_c, rows_d, rows_holes = fill_background_rows(color, depth, cov)
+    c, d, holes = fill_horizontal_parallax(color, depth, cov)
+    np.testing.assert_array_equal(holes, ~cov)
+    np.testing.assert_array_equal(c[cov], color[cov])
+    np.testing.assert_array_equal(d[holes & np.isfinite(rows_d)], rows_d[holes & np.isfinite(rows_d)])
+    taps = np.array([1, 8, 28, 56, 70, 56, 28, 8, 1], np.float64) / 256
+    for v, u in zip(*np.nonzero(holes)):
+        if v == 5:
+            assert (c[v, u] == color[v, u]).all() and np.isnan(d[v, u])
+            continue
+        rows = np.clip(np.arange(v - 4, v + 5), 0, h - 1)
+        wt = taps * (rows != 5)
+        expect = (wt[:, None] * rows_c[rows, u]).sum(0) / wt.sum()
+        np.testing.assert_allclose(c[v, u], expect, rtol=1e-5)
+    # streaks: a hole run whose deeper neighbour alternates 0 / 1 from row to row fills with 0.5
+    col = np.zeros((16, 6, 1), np.float32)
+    col[::2, 5] = 1.0
+    dep = np.full((16, 6), 2.0, np.float32)
+    dep[:, 0] = 1.0  # the near side: not copied
+    cv = np.zeros((16, 6), bool)
+    cv[:, [0, 5]] = True
+    c, _, _ = fill_horizontal_parallax(col, dep, cv)
+    np.testing.assert_allclose(c[4:12, 1:5, 0], 0.5, atol=1e-6)
+    c8, _, _ = fill_horizontal_parallax((col * 255).astype(np.uint8), dep, cv)
+    assert c8.dtype == np.uint8 and (c8[4:12, 1:5, 0] == 128).all()
+    with pytest.raises(ValueError, match="depth"):
+        fill_horizontal_parallax(col, dep[:, :5], cv)
+    with pytest.raises((TypeError, ValueError), match="coverage"):
+        fill_horizontal_parallax(col, dep, cv.astype(np.float32))
+
+
+def test_stereo_disocclusions_without_streaks_closer_to_ray_traced_eyes():
+    """The disocclusions of a clutter pair (method 2, both eyes) against ray-traced eyes: the
+    smoothed row fill scores above the plain row fill (measured 21.01 -> 21.87 dB at 256x192) and
+    varies less from row to row inside the holes (streaks; mean change 0.029 -> 0.015)."""
+    scene = synth.make_scene("clutter")
+    cam, _ = synth.scene_cameras("clutter", width=256, height=192)
+    view = synth.render(scene, cam, supersample=3)
+    e, f = auto_stereo(view.depth)
+    pair = stereo_pair(view, e=e, f=f)
+    err = {"rows": [], "smoothed": []}
+    jumps = {"rows": [], "smoothed": []}
+    for img, holes, depth, ecam in ((pair.left, pair.left_holes, pair.left_depth, pair.left_camera),
+                                    (pair.right, pair.right_holes, pair.right_depth, pair.right_camera)):
+        gt = synth.render(scene, ecam, supersample=3)
+        rows, _, _ = fill_background_rows(img, depth, ~holes)
+        ok = holes & np.isfinite(gt.depth)
+        both = holes[1:] & holes[:-1]
+        for name, c in (("rows", rows), ("smoothed", img)):
+            err[name].append(np.mean((c[ok] - gt.color[ok]) ** 2))
+            jumps[name].append(np.abs(c[1:] - c[:-1])[both].mean())
+    psnr = {k: 10 * np.log10(1 / np.mean(v)) for k, v in err.items()}
+    assert psnr["smoothed"] > psnr["rows"] + 0.5, psnr
+    assert np.mean(jumps["smoothed"]) < 0.7 * np.mean(jumps["rows"]), jumps
 
 
 def test_stereo_pair_from_zbuffer_matches_view_path():

@@ -24,6 +24,7 @@ _EXPORTS = {
     "forward_warp": "forward",
     "fill_background": "fill",
     "fill_background_rows": "fill",
+    "fill_horizontal_parallax": "fill",
     "fill_previous": "fill",
     "Rendering": "view_synthesis",
     "interpolate": "view_synthesis",

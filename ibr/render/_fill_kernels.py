@@ -163,6 +163,35 @@ def fill_rows_background(v0, v1, color, depth, cov, out_holes):
                         color[v, k, c] = color[v, src, c]
 
 
+
+@njit(cache=True, nogil=True)
+def smooth_across_rows(color, idx, row_ok, taps, out):
+    """``out[k]``: the row-filled ``color`` (H, W, C) at the flat pixel index ``idx[k]``,
+    smoothed across rows by ``taps`` (odd length, centred), over rows with ``row_ok`` only (the
+    others hold no colour, and a pixel of such a row keeps its value); clamped at the top and
+    bottom border."""
+    h, w, nc = color.shape
+    r = taps.size // 2
+    for k in range(idx.size):
+        v, u = idx[k] // w, idx[k] % w
+        if not row_ok[v]:
+            for c in range(nc):
+                out[k, c] = color[v, u, c]
+            continue
+        wsum = np.float32(0.0)
+        for c in range(nc):
+            out[k, c] = 0.0
+        for t in range(-r, r + 1):
+            vv = min(max(v + t, 0), h - 1)
+            if row_ok[vv]:
+                wt = taps[t + r]
+                wsum += wt
+                for c in range(nc):
+                    out[k, c] += wt * np.float32(color[vv, u, c])
+        for c in range(nc):
+            out[k, c] /= wsum
+
+
 # ---------------------------------------------------------------------- references
 def fill_rows_background_reference(color, depth, cov):
     """numpy reference of :func:`fill_rows_background` (returns copies and the hole mask)."""

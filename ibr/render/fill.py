@@ -13,8 +13,11 @@
   the push spreads those colours smoothly in 2-D (no row or column streaks), and half of the
   written colour is the background side *along the parallax axis* (where a disocclusion's
   hidden background continues), smoothed across that axis so that it shows no streaks.
-* ``fill_background_rows``: the same rule along rows only, for horizontal-only parallax (stereo
-  pairs, seed 003): each run of uncovered pixels takes the deeper of its two row neighbours.
+* ``fill_background_rows``: the same rule along rows only, for horizontal-only parallax (seed
+  003): each run of uncovered pixels takes the deeper of its two row neighbours.
+* ``fill_horizontal_parallax`` (stereo pairs): the row rule, then each filled pixel smoothed
+  across rows (binomial, sigma 1.4 px), so that rows copied from different pixels of a
+  silhouette's rim show no streaks.
 
 Both return new arrays and a ``filled`` mask; nothing is invented silently (the interpolation
 result carries ``holes`` and ``filled``). Pixel convention: (u, v) = (column, row), centers at
@@ -30,7 +33,8 @@ from .bands import run_bands
 from ..base.first_run import await_kernels
 from ..base.validate import check_array, check_image, check_positive
 
-__all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_previous", "fill_pullpush", "parallax_axis"]
+__all__ = ["FILLS", "fill_background", "fill_background_rows", "fill_horizontal_parallax", "fill_previous",
+           "fill_pullpush", "parallax_axis"]
 
 #: Fill modes accepted by :func:`ibr.interpolate` and ``ibr interpolate --fill``: the previous
 #: frame (sequences), the background pull-push ("inpaint"), issue 4's directional background
@@ -357,3 +361,50 @@ def fill_background_rows(color, depth, coverage) -> tuple[np.ndarray, np.ndarray
     holes = np.zeros(cov.shape, np.bool_)
     run_bands(_k.fill_rows_background, col.shape[0], col, d, np.ascontiguousarray(cov), holes)
     return col, d, holes
+
+
+def fill_horizontal_parallax(color, depth, coverage) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fill the uncovered pixels of a view rendered with horizontal parallax only (a stereo eye).
+
+    Each run of uncovered pixels takes the deeper of its two covered row neighbours (a
+    disocclusion opens behind a foreground edge; a run at the border takes its only neighbour),
+    as :func:`fill_background_rows`; then every filled pixel's colour is smoothed across rows by
+    the binomial [1 8 28 56 70 56 28 8 1] / 256 (sigma 1.4 px) of the row-filled image, so that
+    neighbouring rows copied from different pixels of a silhouette's rim show no streaks (#11).
+    Depth stays the copied background depth.
+
+    Parameters
+    ----------
+    color : (H, W) or (H, W, C) array (any dtype; integer results are rounded)
+    depth : (H, W) float planar depth (scene units), read where ``coverage`` is True
+    coverage : (H, W) bool
+        Pixels the rendering covered; every other pixel is filled.
+
+    Returns
+    -------
+    color (H, W, C) float32 or the integer dtype, depth float32, holes bool
+        Copies; ``holes`` is ``~coverage``. Rows without any covered pixel are not filled
+        (colour as given, depth NaN).
+    """
+    col = check_image("color", color)
+    col = np.ascontiguousarray(col[..., None] if col.ndim == 2 else col)
+    col = col.copy() if col.dtype.kind in "ui" else col.astype(np.float32, copy=True)
+    d = check_array("depth", depth, shape=col.shape[:2], dtype_kind="f").astype(np.float32, copy=True)
+    cov = check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b")
+    d[~cov] = np.nan
+    return col, d, _fill_horizontal_parallax_inplace(col, d, np.ascontiguousarray(cov))
+
+
+def _fill_horizontal_parallax_inplace(color, depth, coverage) -> np.ndarray:
+    """:func:`fill_horizontal_parallax` writing into ``color`` (C-contiguous (H, W, C)) and
+    ``depth`` (C-contiguous float32); returns the holes (``~coverage``)."""
+    holes = np.zeros(coverage.shape, np.bool_)
+    run_bands(_k.fill_rows_background, color.shape[0], color, depth, coverage, holes)
+    row_ok = coverage.any(axis=1)  # rows the row fill could fill (the others keep their colour)
+    idx = np.flatnonzero(holes)
+    smoothed = np.empty((idx.size, color.shape[2]), np.float32)
+    _k.smooth_across_rows(color, idx, row_ok, _ACROSS, smoothed)
+    if color.dtype.kind in "ui":
+        np.floor(smoothed + 0.5, out=smoothed)
+    color.reshape(-1, color.shape[2])[idx] = smoothed
+    return holes

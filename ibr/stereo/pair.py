@@ -16,7 +16,8 @@ Method 2 here maps rows with linear interpolation between connected neighbours (
 color; see :mod:`ibr.stereo._pair_kernels`), which avoids the cracks of copying single pixels;
 ``method="splat"`` is the literal per-pixel copy (rounded to the nearest pixel, z-buffered) and
 also supports Dz != 0. Disocclusions are filled per row from the background side (the deeper of
-the two neighbours of a hole run) and reported as masks.
+the two neighbours of a hole run), smoothed across rows so that no streaks show
+(:func:`ibr.render.fill.fill_horizontal_parallax`), and reported as masks.
 
 Conventions: camera frame x right, y down, z forward; pixel centers at integers (a centered
 principal point of a 512-wide image is cx = 255.5); planar depth in scene units, NaN invalid.
@@ -34,8 +35,8 @@ import cv2
 import numpy as np
 
 from . import _pair_kernels as _k
-from ..render import _fill_kernels as _fill_k
 from ..render.bands import run_bands
+from ..render.fill import _fill_horizontal_parallax_inplace
 from ..base.validate import (check_array, check_choice, check_color, check_finite_scalar, check_image,
                              check_mesh_options, check_positive)
 from ..base.camera import Camera, camera_from_gl_projection
@@ -293,8 +294,7 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
         if c.dtype.kind not in "ui":
             c = np.ascontiguousarray(c, dtype=np.float32)
         d = np.ascontiguousarray(d, dtype=np.float32)
-        holes = np.zeros(cov.shape, np.bool_)
-        run_bands(_fill_k.fill_rows_background, c.shape[0], c, d, np.ascontiguousarray(cov), holes)  # in place
+        holes = _fill_horizontal_parallax_inplace(c, d, cov)
         out[eye] = (_to_dtype(c, np.asarray(view.color).dtype, np.ndim(view.color)), d, holes)
     return StereoPair(out["left"][0], out["right"][0], out["left"][2], out["right"][2],
                       out["left"][1], out["right"][1], left_cam, right_cam)
