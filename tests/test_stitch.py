@@ -224,10 +224,40 @@ def test_unseen_polar_caps_are_filled_smoothly_not_with_streaks(ring_views, trut
     np.testing.assert_array_equal(new[~far], old[~far])
     np.testing.assert_array_equal(new_z, old_z)
     assert np.array_equal(filled, holes)
-    filled_eye = ods_from_views(ring_views, W, fill="background").eyes[0]
-    np.testing.assert_array_equal(filled_eye.color, new)
+    filled_eye = ods_from_views(ring_views, W, fill="background").eyes[0]  # an eye: filled along its rows
+    np.testing.assert_array_equal(filled_eye.color, fill_panorama(eye.color, eye.depth, holes, parallax="rows")[0])
     u8, _, _ = fill_panorama((np.clip(eye.color, 0, 1) * 255).round().astype(np.uint8), eye.depth, holes)
     assert u8.dtype == np.uint8 and np.abs(u8.astype(np.float64) / 255 - new).max() < 1.0 / 255 + 1e-6
+
+
+
+def test_ods_eye_holes_take_the_row_fill(ring_views, truths):
+    """An ODS eye's parallax runs along its rows: its disocclusions take the deeper row
+    neighbour smoothed across rows (``parallax="rows"``), which beats the row-and-column fill of
+    mono panoramas on the hole pixels. Measured at 256 wide: ODS from one centre panorama 19.97
+    -> 22.90 / 19.88 -> 22.09 dB (left / right), the ring's eyes within 4 px of a seen pixel
+    26.76 -> 28.35 / 26.74 -> 28.62 dB (the caps beyond still blend into the smooth fill)."""
+    import cv2
+
+    from panorama.stitch.fill import fill_panorama
+
+    color, rng = truths["mono"]
+    bare = ods_from_panorama(color, rng, fill="none")
+    filled = ods_from_panorama(color, rng)
+    for e, f in zip(bare.eyes, filled.eyes):
+        t = truths[e.camera.eye][0]
+        rows = fill_panorama(e.color, e.depth, e.holes, parallax="rows")[0]
+        any_way = fill_panorama(e.color, e.depth, e.holes)[0]
+        np.testing.assert_array_equal(f.color, rows)
+        assert psnr(rows, t, e.holes) > psnr(any_way, t, e.holes) + 1.5
+    for e in ods_from_views(ring_views, W, fill="none").eyes:
+        t = truths[e.camera.eye][0]
+        near = e.holes & (cv2.distanceTransform(e.holes.astype(np.uint8), cv2.DIST_L2, 5) <= 4)
+        rows = fill_panorama(e.color, e.depth, e.holes, parallax="rows")[0]
+        any_way = fill_panorama(e.color, e.depth, e.holes)[0]
+        assert psnr(rows, t, near) > psnr(any_way, t, near) + 1.0
+    with pytest.raises(ValueError, match="parallax"):
+        fill_panorama(e.color, e.depth, e.holes, parallax="columns")
 
 
 def test_panorama_fill_far_from_a_seen_region_keeps_its_colour():

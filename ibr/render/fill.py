@@ -378,17 +378,16 @@ def fill_horizontal_parallax(color, depth, coverage) -> tuple[np.ndarray, np.nda
     color : (H, W) or (H, W, C) array (any dtype; integer results are rounded)
     depth : (H, W) float planar depth (scene units), read where ``coverage`` is True
     coverage : (H, W) bool
-        Pixels the rendering covered; every other pixel is filled.
+        Pixels the rendering covered; every other pixel is filled (its values are ignored).
 
     Returns
     -------
-    color (H, W, C) float32 or the integer dtype, depth float32, holes bool
+    color (H, W, C) in the input dtype, depth float32, holes bool
         Copies; ``holes`` is ``~coverage``. Rows without any covered pixel are not filled
         (colour as given, depth NaN).
     """
     col = check_image("color", color)
-    col = np.ascontiguousarray(col[..., None] if col.ndim == 2 else col)
-    col = col.copy() if col.dtype.kind in "ui" else col.astype(np.float32, copy=True)
+    col = np.ascontiguousarray(col[..., None] if col.ndim == 2 else col).copy()
     d = check_array("depth", depth, shape=col.shape[:2], dtype_kind="f").astype(np.float32, copy=True)
     cov = check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b")
     d[~cov] = np.nan

@@ -3,8 +3,14 @@ regions (a ring rig's polar caps) smoothly.
 
 A stitched eye or panorama has two kinds of holes. Disocclusions beside objects are a few pixels
 wide and open along the parallax (rows of an equirect); the directional background fill of
-issue 4 (:func:`ibr.render.fill.fill_background`) fills them best (20-21 dB on the hole pixels of
-the ODS benchmark, against 14.7-16.6 dB for the pull-push of ``ibr interpolate``, docs/stitch.md).
+issue 4 (:func:`ibr.render.fill.fill_background`) fills them better than the pull-push of
+``ibr interpolate`` (20-21 dB on the hole pixels of the ODS benchmark, against 14.7-16.6 dB,
+docs/stitch.md). An ODS eye's parallax runs along its rows by construction, so its holes take
+the row fill of stereo pairs instead (:func:`ibr.render.fill.fill_horizontal_parallax`: the
+deeper row neighbour, smoothed across rows): ODS from one centre panorama 20.0-21.7 -> 20.3-23.9
+dB on the hole pixels, the ring's eyes within 6 px of a seen pixel 24.2-25.4 -> 25.9-26.7 dB
+(``benchmarks/bench_stitch.py``). A mono panorama's sources may be displaced in any direction,
+so it keeps the fill of rows and columns.
 Regions no camera saw (the zenith and nadir of a ring of cameras, 41.5 % of each ODS eye of the
 8-camera ring) are tens to hundreds of pixels from any seen pixel; copying rows or columns into
 them draws tall streaks. There the fill blends, with the distance to the nearest seen pixel, into
@@ -23,9 +29,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ibr.base.validate import check_number
+from ibr.base.validate import check_choice, check_number
 
-__all__ = ["CAP_PX_PER_WIDTH", "fill_panorama", "fill_stitched"]
+__all__ = ["CAP_PX_PER_WIDTH", "PARALLAX", "fill_panorama", "fill_stitched"]
+
+#: Directions of the parallax :func:`fill_panorama` fills along: every way, or rows (ODS eyes).
+PARALLAX = ("any", "rows")
 
 #: Hole pixels farther than ``cap_px`` from any seen pixel blend into the smooth fill, fully at
 #: twice that distance; ``cap_px`` defaults to this share of the image width (8 px at 1024 wide,
@@ -34,7 +43,7 @@ __all__ = ["CAP_PX_PER_WIDTH", "fill_panorama", "fill_stitched"]
 CAP_PX_PER_WIDTH = 1.0 / 128
 
 
-def fill_panorama(color, depth, holes, *, cap_px: float | None = None):
+def fill_panorama(color, depth, holes, *, cap_px: float | None = None, parallax: str = "any"):
     """Fill the holes of a stitched panorama (or one ODS eye).
 
     Parameters
@@ -46,6 +55,11 @@ def fill_panorama(color, depth, holes, *, cap_px: float | None = None):
     cap_px : float, optional
         Distance (pixels) from the nearest seen pixel beyond which a hole pixel starts to blend
         into the smooth fill (fully at ``2 cap_px``); default ``max(4, W * CAP_PX_PER_WIDTH)``.
+    parallax : {"any", "rows"}
+        Direction of the parallax that opened the disocclusions: ``"any"`` (a mono panorama
+        from sources displaced every way) takes the farther of the row and column neighbours
+        (:func:`ibr.render.fill.fill_background`), ``"rows"`` (an ODS eye) the deeper row
+        neighbour smoothed across rows (:func:`ibr.render.fill.fill_horizontal_parallax`).
 
     Returns
     -------
@@ -59,13 +73,12 @@ def fill_panorama(color, depth, holes, *, cap_px: float | None = None):
     """
     import cv2
 
-    from ibr.render.fill import fill_background
-
     if cap_px is not None:
         cap_px = float(check_number("cap_px", cap_px, minimum=0, exclusive_minimum=True))
+    check_choice("parallax", parallax, PARALLAX)
     color = np.asarray(color)
     flat = color.ndim == 2
-    out, z, filled = fill_background(color[..., None] if flat else color, depth, holes)
+    out, z, filled = _directional(color[..., None] if flat else color, depth, holes, parallax)
     h, w = out.shape[:2]
     holes = np.asarray(holes)
     if holes.any() and not holes.all():
@@ -87,6 +100,19 @@ def fill_panorama(color, depth, holes, *, cap_px: float | None = None):
             out[far] = blend.astype(out.dtype)
             filled = filled | far
     return (out[..., 0] if flat else out), z, filled
+
+
+def _directional(color, depth, holes, parallax: str):
+    """The background side of each hole, along rows and columns (``"any"``) or along rows
+    (``"rows"``): new (colour (H, W, C) in the input dtype, depth float32, filled)."""
+    from ibr.render.fill import fill_background, fill_horizontal_parallax
+
+    if parallax == "any":
+        return fill_background(color, depth, holes)
+    holes = np.asarray(holes)
+    seen = ~holes
+    out, z, _ = fill_horizontal_parallax(color, depth, seen)
+    return out, z, holes & seen.any(axis=1)[:, None]  # a row nobody saw is not filled
 
 
 def _smooth_fill(color: np.ndarray, holes: np.ndarray) -> np.ndarray:
@@ -119,10 +145,13 @@ def _smooth_fill(color: np.ndarray, holes: np.ndarray) -> np.ndarray:
 def fill_stitched(stitched):
     """A :class:`~panorama.stitch.rgbd.Stitched` panorama with its holes filled by
     :func:`fill_panorama` (colour and depth; ``holes`` still marks them); returned as is when
-    it has none. The one fill of ``ibr stitch`` and of the ODS eyes (``fill="background"``)."""
+    it has none. The one fill of ``ibr stitch`` and of the ODS eyes (``fill="background"``); an
+    ODS eye (camera ``eye`` "left" / "right") is filled along its rows (``parallax="rows"``)."""
     from .rgbd import Stitched
 
     if not stitched.holes.any():
         return stitched
-    color, depth, _ = fill_panorama(stitched.color, stitched.depth, stitched.holes)
+    eye = getattr(stitched.camera, "eye", "mono")
+    color, depth, _ = fill_panorama(stitched.color, stitched.depth, stitched.holes,
+                                    parallax="rows" if eye in ("left", "right") else "any")
     return Stitched(color, depth, stitched.holes, stitched.winner, stitched.camera)
