@@ -477,3 +477,41 @@ def test_sliver_between_two_foreground_edges_takes_the_background_not_the_farthe
     a, _, _ = fill_pullpush(cw, zw, wide, axis=0)
     b, _, _ = fill_pullpush(cw, zw, wide, axis=0, mix=0.0)
     assert np.abs(a[wide].astype(float) - b[wide]).mean() > 10  # the directional half was mixed in
+
+
+def test_pullpush_hard_cases_corner_out_of_view_inf_depth_tiny_eps_int32():
+    """Hard cases of the pull-push fill on a uniform grey scene (the fill must give the grey
+    back): an L-shaped out-of-view border (top rows and left columns, as after a diagonal
+    move), where the corner block has no covered pixel on its row or column and whatever the
+    caller left in the holes (0 or 255) leaked into the smoothed directional half; one +inf
+    depth (it set the reference depth to inf and turned the whole fill off); push strengths so
+    small that the weights became denormal (1 / weight overflowed to inf / NaN); int32 colour
+    (OpenCV cannot filter it)."""
+    h, w = 60, 80
+    grey = np.full((h, w, 3), 100, np.uint8)
+    depth = np.full((h, w), 5.0, np.float32)
+    holes = np.zeros((h, w), bool)
+    holes[:6] = True
+    holes[:, :6] = True
+    outs = []
+    for left_in_holes in (0, 255):
+        c = grey.copy()
+        c[holes] = left_in_holes
+        out, _, filled = fill_pullpush(c, depth, holes)
+        assert filled[holes].all() and not filled[~holes].any()
+        outs.append(out)
+    np.testing.assert_array_equal(outs[0], grey)
+    np.testing.assert_array_equal(outs[1], grey)
+    z_inf = depth.copy()
+    z_inf[30, 40] = np.inf
+    out, z, filled = fill_pullpush(grey, z_inf, holes)
+    assert filled[holes].all() and (out == 100).all() and np.isfinite(z[holes]).all()
+    big = np.zeros((256, 256), bool)
+    big[20:236, 20:236] = True
+    g256 = np.full((256, 256, 3), 0.4, np.float32)
+    for eps in (1e-8, 1e-10):
+        out, z, filled = fill_pullpush(g256, np.full((256, 256), 5.0, np.float32), big, eps=eps)
+        assert filled[big].all() and np.isfinite(out).all() and np.isfinite(z[big]).all()
+        np.testing.assert_allclose(out[big], 0.4, atol=1e-6)
+    out, _, filled = fill_pullpush(grey.astype(np.int32), depth, holes)
+    assert out.dtype == np.int32 and (out == 100).all()

@@ -81,7 +81,7 @@ def test_downsampling_copies_and_checks_shapes():
         downsample_rendering(color, depth[:2], holes, holes, k)
 
 
-@pytest.mark.parametrize("dtype", ["gray", "uint16", "float32", "rgba"])
+@pytest.mark.parametrize("dtype", ["gray", "gray3d", "uint16", "float32", "rgba"])
 def test_every_colour_layout_and_the_forward_method_and_previous_fill(dtype, clutter):
     """Supersampled frames keep the source's colour dtype and layout, for the mesh and the
     forward method and with the previous-frame fill; the bright/dark edge band still gains."""
@@ -91,6 +91,8 @@ def test_every_colour_layout_and_the_forward_method_and_previous_fill(dtype, clu
         c = v.color
         if dtype == "gray":
             c = c.mean(axis=2).astype(np.uint8)
+        elif dtype == "gray3d":  # (H, W, 1): OpenCV's resize drops that axis
+            c = c.mean(axis=2, keepdims=True).astype(np.uint8)
         elif dtype == "uint16":
             c = c.astype(np.uint16) * 257
         elif dtype == "float32":

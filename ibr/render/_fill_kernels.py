@@ -233,8 +233,8 @@ def _bg_weight(z, izref, squarings):
 def pp_pull0(color, depth, holes, izref, squarings, coarse):
     """Level 0 -> 1 of the pull-push pyramid in one pass: every covered pixel with valid depth
     enters as ``(w c_0, .., w c_{C-1}, w z, w)`` with the background weight of :func:`_bg_weight`,
-    summed over 2x2 cells into ``coarse`` (last channel: the weight). One row-major sweep; three
-    channels (RGB) are unrolled."""
+    summed over 2x2 cells into ``coarse`` (last channel: the weight); a depth of 0, NaN or inf is
+    no depth. One row-major sweep; three channels (RGB) are unrolled."""
     h, w, nc = color.shape
     coarse[:] = 0.0
     zero = np.float32(0.0)
@@ -242,7 +242,7 @@ def pp_pull0(color, depth, holes, izref, squarings, coarse):
         cv = v >> 1
         for u in range(w):
             z = depth[v, u]
-            if holes[v, u] or not (z > 0.0):
+            if holes[v, u] or not (z > 0.0 and z < np.inf):
                 continue
             wt = _bg_weight(z, izref, squarings)
             cu = u >> 1
@@ -298,7 +298,9 @@ def pp_push(sums, coarse_val, eps, need, out_val):
             cu, ou = _up_taps(u, wc)
             e = eps * np.float32(0.25) * _up(coarse_val, cv, cu, ov, ou, nv)
             den = sums[v, u, nv] + e
-            if den > 0.0:
+            # a covered pixel weighs >= 1e-30 (_bg_weight): below that the cell has no weight of
+            # its own (S = 0) and takes the coarser value as is (1 / den would overflow)
+            if den >= np.float32(1e-30):
                 inv = np.float32(1.0) / den
                 for k in range(nv):
                     out_val[v, u, k] = (sums[v, u, k] + e * _up(coarse_val, cv, cu, ov, ou, k)) * inv

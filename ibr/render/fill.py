@@ -62,6 +62,9 @@ DIRECT_CHECK_RUN = 8
 #: pull-push fill is smoothed with it across the parallax axis.
 _ACROSS = np.array([1, 8, 28, 56, 70, 56, 28, 8, 1], np.float32) / np.float32(256)
 _ONE_PIXEL = np.zeros((1, 1, 1), np.float32)
+#: Dtypes ``cv2.sepFilter2D`` filters as they are (others go through float32).
+_FILTER_DTYPES = (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(np.int16), np.dtype(np.float32),
+                  np.dtype(np.float64))
 
 
 def _check(color, depth, holes):
@@ -249,7 +252,7 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         f = _fill_pullpush_inplace(c, z, hb, axis=axis, power=power, eps=eps, smooth=smooth, mix=mix)
         color[box], depth[box], filled[box] = c, z, f
         return filled
-    zmax = float(np.max(depth, where=~holes & (depth > 0), initial=0.0))  # the farthest covered depth
+    zmax = float(np.max(depth, where=~holes & (depth > 0) & (depth < np.inf), initial=0.0))  # the farthest covered depth
     if not zmax > 0:
         return filled
     h, w, nc = color.shape
@@ -310,6 +313,15 @@ def _directional_fill(color, depth, holes, axis, mix):
     # different pixels do not show as streaks; outside the holes it reads the image
     one = np.ones(1, np.float32)
     kx, ky = (_ACROSS, one) if axis == 1 else (one, _ACROSS)
+    unreached = holes & ~direct_ok  # whole row and column are holes (a corner out of view)
+    if direct.dtype not in _FILTER_DTYPES or unreached.any():
+        # normalized: the unreached pixels hold whatever the caller left in the holes, never
+        # read (float32: also the dtypes OpenCV cannot filter)
+        known = (~unreached).astype(np.float32)
+        direct = direct.astype(np.float32) * known[..., None]
+        sums = cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc)
+        wts = cv2.sepFilter2D(known, -1, kx, ky, borderType=cv2.BORDER_REPLICATE)
+        return sums / np.maximum(wts, np.float32(1e-6))[..., None], direct_ok, direct_z
     return cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc), direct_ok, direct_z
 
 

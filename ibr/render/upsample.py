@@ -89,6 +89,8 @@ def upsample_view(view: View, k: int) -> View:
     h, w = view.depth.shape
     camera = view.camera.resized(w * k, h * k)
     color = cv2.resize(view.color, (w * k, h * k), interpolation=cv2.INTER_CUBIC)
+    if color.ndim < view.color.ndim:  # OpenCV drops a single channel axis: (H, W, 1) stays 3-D
+        color = color[..., None]
     depth = _smooth_depth(view.depth, k)
     q = quantization_of(view)
     _place_silhouettes(depth, view.depth, _unit_color(view.color), k, q)
