@@ -32,6 +32,8 @@ _CV_INTERP = {"linear": cv2.INTER_LINEAR, "nearest": cv2.INTER_NEAREST}
 PREFILTER_THRESHOLD = 1.5
 #: Output pixels per source pixel from which 8-bit RGB is sampled as RGBA (see :func:`remap`)
 _FOUR_CHANNEL_MIN = 0.5
+#: ``cv2.remap`` asserts a source of fewer rows than this (SHRT_MAX); taller ones go in strips
+_MAX_REMAP_ROWS = 32767
 
 
 def _as_remappable(img: np.ndarray) -> np.ndarray:
@@ -58,21 +60,53 @@ def remap(src: np.ndarray, smap: SampleMap, *, interpolation: str = "linear", ou
     border = cv2.BORDER_WRAP if (smap.source == "equirect" and not smap.pad) else cv2.BORDER_REPLICATE
     flag = _CV_INTERP[interpolation]
     channels = 1 if work.ndim == 2 else work.shape[2]
-    if channels == 3 and work.dtype == np.uint8 and smap.map_x.size >= _FOUR_CHANNEL_MIN * work.shape[0] * work.shape[1]:
+    if work.shape[0] >= _MAX_REMAP_ROWS:  # a cube atlas of faces over 5458 px (6 (S + 2) rows)
+        out = _remap_in_strips(work, smap, flag, border)
+        if dst is not None:
+            dst[...] = out.reshape(dst.shape)
+            out = dst
+    elif channels == 3 and work.dtype == np.uint8 and smap.map_x.size >= _FOUR_CHANNEL_MIN * work.shape[0] * work.shape[1]:
         # OpenCV 5 samples four 8-bit channels with SIMD, three without (1.6x the time per output
         # pixel): a fourth channel pays when the output has at least half the source's pixels
         # (e2c), not for a view much smaller than its panorama. Results are identical.
         out4 = cv2.remap(cv2.cvtColor(work, cv2.COLOR_RGB2RGBA), smap.map_x, smap.map_y, flag, borderMode=border)
         out = cv2.cvtColor(out4, cv2.COLOR_RGBA2RGB, dst=dst)
-    elif channels <= 4:
-        out = cv2.remap(work, smap.map_x, smap.map_y, flag, dst=dst, borderMode=border)
-        if work.ndim == 3 and out.ndim == 2:
-            out = out[..., None]
-    else:  # OpenCV handles at most 4 channels per call
-        out = np.concatenate(
-            [cv2.remap(work[..., c:c + 4], smap.map_x, smap.map_y, flag, borderMode=border)
-             .reshape(smap.map_x.shape + (-1,)) for c in range(0, channels, 4)], axis=-1)
+    else:
+        out = _remap_channels(work, smap.map_x, smap.map_y, flag, border, dst)
     return out if out.dtype == out_dtype else out.astype(out_dtype)
+
+
+def _remap_channels(work, map_x, map_y, flag, border, dst=None) -> np.ndarray:
+    """``cv2.remap`` of any number of channels (OpenCV takes at most 4 per call); a (H, W, 1)
+    input keeps its channel axis."""
+    channels = 1 if work.ndim == 2 else work.shape[2]
+    if channels <= 4:
+        out = cv2.remap(work, map_x, map_y, flag, dst=dst, borderMode=border)
+        return out[..., None] if work.ndim == 3 and out.ndim == 2 else out
+    return np.concatenate([cv2.remap(work[..., c:c + 4], map_x, map_y, flag, borderMode=border)
+                           .reshape(map_x.shape + (-1,)) for c in range(0, channels, 4)], axis=-1)
+
+
+def _remap_in_strips(work, smap: SampleMap, flag, border) -> np.ndarray:
+    """:func:`remap` of a source with too many rows for ``cv2.remap`` (it asserts fewer than
+    32767): strips of rows overlapping by one row, each output pixel taken from the strip that
+    holds its bilinear taps (rows floor(y) and floor(y) + 1; the first and last strips also
+    take what lies above or below the image, as the border mode says)."""
+    h = work.shape[0]
+    step = _MAX_REMAP_ROWS - 2
+    owner = np.clip(np.floor(smap.map_y) // step, 0, (h - 1) // step).astype(np.int64)
+    out = None
+    for k in range(int(owner.max()) + 1):
+        mine = owner == k
+        if not mine.any():
+            continue
+        r0 = k * step
+        part = _remap_channels(work[r0:min(r0 + step + 1, h)], smap.map_x, smap.map_y - np.float32(r0), flag, border)
+        if out is None:
+            out = part
+        else:
+            out[mine] = part[mine]
+    return out
 
 
 def pad_equirect(img: np.ndarray) -> np.ndarray:

@@ -377,3 +377,25 @@ def test_rgb_sampled_as_rgba_is_the_same_as_three_channels():
     per_channel = np.stack([cv2.remap(np.ascontiguousarray(img[..., c]), smap.map_x, smap.map_y, cv2.INTER_LINEAR,
                                       borderMode=border) for c in range(3)], -1)
     np.testing.assert_array_equal(out, per_channel)
+
+
+@pytest.mark.parametrize("channels", [1, 3, 5])
+def test_sources_taller_than_cv2_remap_allows_are_sampled_in_strips(monkeypatch, channels):
+    """``cv2.remap`` asserts a source of fewer than 32767 rows, and the padded cube atlas has
+    6 (S + 2): faces over 5458 px crashed ``perspective`` and ``cubemap_to_equirect``. Such sources
+    are sampled in strips of rows; with the limit lowered to 40 rows the strips must give exactly
+    what one remap gives (bilinear and nearest, views and equirects from faces)."""
+    import panorama.sampling as S
+
+    rng = np.random.default_rng(3)
+    shape = (10, 10) if channels == 1 else (10, 10, channels)
+    faces = [rng.integers(0, 255, shape).astype(np.uint8) for _ in range(6)]  # atlas: 72 rows
+    args = dict(layout="list", yaw_deg=37.0, pitch_deg=-64.0, fov_deg=120.0, width=48, height=40)
+    expect = [P.perspective(faces, **args), P.perspective(faces, interpolation="nearest", **args),
+              P.cubemap_to_equirect(faces, 40, 20, layout="list")]
+    monkeypatch.setattr(S, "_MAX_REMAP_ROWS", 40)
+    got = [P.perspective(faces, **args), P.perspective(faces, interpolation="nearest", **args),
+           P.cubemap_to_equirect(faces, 40, 20, layout="list")]
+    for e, g in zip(expect, got):
+        assert g.shape == e.shape and g.dtype == e.dtype
+        np.testing.assert_array_equal(g, e)
