@@ -481,3 +481,27 @@ def test_antialias_prefilters_sources_finer_than_the_target(scene, truths):
     smooth = stitch_rgbd(views, eq)
     seen = ~sharp.holes & ~smooth.holes
     assert psnr(smooth.color, truths["mono"][0], seen) > psnr(sharp.color, truths["mono"][0], seen) + 0.5
+
+
+def test_ods_from_a_panorama_whose_sky_has_no_range():
+    """A centre panorama with range on the floor only (NaN in the sky, as a depth sensor gives
+    it): the cube face that sees only sky has nothing to render and is left out instead of
+    refusing the whole panorama; the floor reaches both eyes, the sky directions are reported as
+    holes. A range that is NaN everywhere is refused by name."""
+    from panorama.directions import equirect_directions
+    from panorama.stitch.ods import panorama_views
+
+    h, w = 32, 64
+    d = equirect_directions(w, h)
+    color = np.random.default_rng(0).random((h, w, 3)).astype(np.float32)
+    with np.errstate(divide="ignore"):
+        rng = np.where(d[..., 1] > 0.05, 1.6 / d[..., 1], np.nan).astype(np.float32)  # y down: the floor
+    views = panorama_views(color, rng)  # six faces, as the viewer's face meshes need them
+    assert len(views) == 6 and sum(np.isfinite(v.depth).any() for v in views) == 5
+    pair = ods_from_panorama(color, rng, fill="none")
+    for eye in pair.eyes:
+        floor = d[..., 1] > 0.5  # well below the horizon
+        sky = d[..., 1] < -0.5
+        assert not eye.holes[floor].any() and eye.holes[sky].all()
+    with pytest.raises(ValueError, match="range_"):
+        ods_from_panorama(color, np.full((h, w), np.nan, np.float32))

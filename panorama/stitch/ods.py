@@ -133,8 +133,12 @@ def ods_from_panorama(color, range_, *, width: int | None = None, ipd: float = 0
     The eyes sit ``ipd / 2`` off the centre, so surfaces the centre did not see (behind near
     objects) are disoccluded: they are filled from the background side (``fill="background"``,
     default) and always reported in each eye's ``holes``. ``width`` defaults to the input's.
+    A cube face without any range (a sky without depth) has nothing to render and is left out:
+    its directions are holes of the eyes.
     """
-    views = panorama_views(color, range_, face_size=face_size)
+    views = [v for v in panorama_views(color, range_, face_size=face_size) if np.isfinite(v.depth).any()]
+    if not views:
+        raise ValueError("range_: no pixel has a range (all NaN): nothing to stitch")
     width = np.asarray(color).shape[1] if width is None else width
     return ods_from_views(views, width, ipd=ipd, fade_start_deg=fade_start_deg, fade_end_deg=fade_end_deg,
                           center=(0.0, 0.0, 0.0), fill=fill, mesh_options=mesh_options, progress=progress,
