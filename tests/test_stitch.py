@@ -505,3 +505,24 @@ def test_ods_from_a_panorama_whose_sky_has_no_range():
         assert not eye.holes[floor].any() and eye.holes[sky].all()
     with pytest.raises(ValueError, match="range_"):
         ods_from_panorama(color, np.full((h, w), np.nan, np.float32))
+
+
+def test_small_review_findings_of_the_ods_helpers(cube_views):
+    """(1) Slits must cover their whole latitude band: at a strip's side edge the ray to
+    lat_max meets the slit's plane 1 / cos(pi / n) farther out (64 holes on the rows at
+    +-59.8 deg before). (2) A point on the rig's vertical axis, where an eye's circle has shrunk
+    to 0, has no longitude: all NaN like every unseen point (u was NaN, v and range finite).
+    (3) ``pack_ods(..., "cube")`` of a 2-wide pair: faces of 1 px (the default W / 4 was 0)."""
+    from ibr.base.ray_camera import SphericalCamera
+
+    mono = SphericalCamera(W, W // 2, "mono", fade_start_deg=60, fade_end_deg=80)
+    r = slit_stitch(cube_views, mono, 8)
+    lat = np.degrees(mono.lat(np.arange(W // 2)))
+    assert not r.holes[np.abs(lat) <= 60].any()
+    eye = ods_cameras(4096)[0]
+    u, v, rng = eye.project(np.array([[0.0, -3.0, 0.0]]))
+    assert np.isnan(u).all() and np.isnan(v).all() and np.isnan(rng).all()
+    u, v, rng = eye.project(np.array([[0.0, 0.0, 2.0]]))  # the module docstring's worked number
+    assert u[0] == pytest.approx(2057.93, abs=0.01)
+    faces = pack_ods(ods_from_views(cube_views, 2), "cube")[0]
+    assert all(f.shape[:2] == (1, 1) for f in faces.values())

@@ -29,7 +29,7 @@ Inverse (point -> pixel), closed form for constant r: with the point's horizonta
 depends on lat: a few fixed-point steps on lat converge (|dr/dlat| << rho). Points with
 ``rho < r`` (closer to the axis than the viewing circle) are seen by no ray of the eye.
 Worked number: ipd = 0.064, a point at (0, 0, 2) (2 m ahead) is seen by the left eye at
-lon = -asin(-0.032 / 2) = +0.9168 deg, i.e. column 2058.93 of a 4096-wide image (the mono
+lon = -asin(-0.032 / 2) = +0.9168 deg, i.e. column 2057.93 of a 4096-wide image (the mono
 camera sees it at 2047.5).
 """
 
@@ -216,7 +216,7 @@ class SphericalCamera:
             lon = alpha - np.arcsin(self.sign * r / rho) if self.sign else alpha
             rng = np.sqrt(np.maximum(rho * rho - r * r, 0.0) + y * y)
         lon = (lon + np.pi) % (2 * np.pi) - np.pi
-        bad = ~(rho >= r) | ~np.isfinite(lat)
+        bad = ~(rho >= r) | ~np.isfinite(lat) | ~np.isfinite(lon)  # lon: 0 / 0 on the axis where r = 0
         u = np.where(bad, np.nan, self.u_of_lon(lon))
         v = np.where(bad, np.nan, self.v_of_lat(lat))
         return u, v, np.where(bad, np.nan, rng)

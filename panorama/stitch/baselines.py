@@ -143,7 +143,9 @@ def slit_stitch(views, camera: SphericalCamera, n: int, *, lat_max_deg: float | 
     h, w = camera.shape
     f = w / (2 * math.pi)
     half_w = int(math.ceil(f * math.tan(math.pi / n))) + margin_px
-    half_h = int(math.ceil(f * math.tan(lat_max))) + margin_px
+    # at a strip's side edge (pi / n off its axis) the ray to lat_max meets the slit's plane
+    # 1 / cos(pi / n) farther out than on the axis
+    half_h = int(math.ceil(f * math.tan(lat_max) / math.cos(math.pi / n))) + margin_px
     sw, sh = 2 * half_w, 2 * half_h
     r = camera.sign * float(camera.radius(0.0))
     v, u = np.mgrid[0:h, 0:w]

@@ -165,7 +165,7 @@ def pack_ods(pair: OdsPair, layout: str = "top-bottom", *, face_size: int | None
     if layout == "anaglyph":
         return anaglyph(left, right)
     if face_size is None:
-        s = left.shape[1] // 4
+        s = max(1, left.shape[1] // 4)
     elif isinstance(face_size, bool) or not isinstance(face_size, (int, np.integer)) or face_size < 1:
         raise ValueError(f"face_size: expected a positive integer, got {face_size!r}")  # 0 meant "default"
     else:
