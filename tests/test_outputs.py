@@ -426,3 +426,30 @@ def test_real_benchmarks_write_where_they_are_pointed():
         names = {t.id for node in tree.body if isinstance(node, ast.Assign) for t in node.targets
                  if isinstance(t, ast.Name)}
         assert "RESULTS" in names, f"{path.name}: no module-level RESULTS"
+
+
+def test_a_short_png_write_raises_and_keeps_the_old_file(tmp_path):
+    """OpenImageIO's PNG writer returns success on a short write (a full disk) and reports it
+    only in ``geterror()``; the truncated file was renamed over the good one. Simulated with a
+    file-size limit in a child process: the write must raise and the old file stay as it was."""
+    good = tmp_path / "a.png"
+    code = f"""
+import resource, signal, sys
+import numpy as np
+sys.path.insert(0, {str(Path(__file__).resolve().parents[1])!r})
+from ibr.io import write_image
+write_image({str(good)!r}, np.zeros((8, 8, 3), np.uint8))
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (4000, resource.RLIM_INFINITY))
+noise = np.random.default_rng(0).integers(0, 255, (64, 64, 3), dtype=np.uint8)
+try:
+    write_image({str(good)!r}, noise)
+except OSError as exc:
+    print("raised:", exc)
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert "raised:" in out.stdout and "write failed" in out.stdout, out.stdout + out.stderr
+    from ibr.io import read_image
+
+    np.testing.assert_array_equal(read_image(good), np.zeros((8, 8, 3), np.uint8))
+    assert [p.name for p in tmp_path.iterdir()] == ["a.png"]  # no temporary file left

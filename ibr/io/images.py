@@ -286,10 +286,15 @@ def write_image(path, array) -> None:
         try:
             if not out.open(str(tmp), spec):
                 raise OSError(f"{path}: cannot open for writing: {_one_line(out.geterror())}")
-            if not out.write_image(np.ascontiguousarray(arr)):
-                raise OSError(f"{path}: write failed: {_one_line(out.geterror())}")
+            written = out.write_image(np.ascontiguousarray(arr))
+            error = out.geterror()  # OIIO's PNG writer reports a short write (a full disk) only here
+            if not written or error:
+                raise OSError(f"{path}: write failed: {_one_line(error)}")
         finally:
-            out.close()
+            closed = out.close()
+        error = out.geterror()
+        if not closed or error:  # nothing is renamed into place: atomic_path drops the temporary file
+            raise OSError(f"{path}: write failed when closing the file: {_one_line(error)}")
 
 
 # --------------------------------------------------------------------------- depth files
