@@ -299,3 +299,31 @@ def test_other_tools_keys_are_ignored_and_misspellings_refused(tmp_path):
     (tmp_path / "t.json").write_text(json.dumps(t))
     with pytest.raises(ValueError, match=r"frames\[0\]: unknown key 'fil_path' \(did you mean 'file_path'\?\)"):
         read_frames("nerf", tmp_path / "t.json")
+
+
+def test_depth_scale_and_per_frame_focal_length_of_every_format(tmp_path):
+    """``depth_scale`` / ``--depth-scale`` reached only COLMAP: for nerf and tum it was accepted
+    and ignored (depth 1000x off, exit 0). A frame's own ``camera_angle_x`` lost to the top
+    level's ``fl_x`` (nerf: per-frame intrinsics override the top level's)."""
+    write_image(tmp_path / "a.png", np.zeros((48, 64, 3), np.uint8))
+    from ibr.io import write_depth
+
+    write_depth(tmp_path / "a_depth.exr", np.full((48, 64), 2000.0, np.float32))  # millimetres
+    frame = {"file_path": "a.png", "transform_matrix": np.eye(4).tolist(), "depth_file_path": "a_depth.exr"}
+    (tmp_path / "t.json").write_text(json.dumps({"fl_x": 50, "w": 64, "h": 48, "frames": [frame]}))
+    assert read_frames("nerf", tmp_path / "t.json", depth_scale=0.001)[0].depth_scale == 0.001
+    assert cli.main(["import", "nerf", str(tmp_path / "t.json"), "--out", str(tmp_path / "out"),
+                     "--depth-scale", "0.001"]) == 0
+    (view,) = [load_view(p) for p in sorted((tmp_path / "out").glob("*.json"))]
+    np.testing.assert_allclose(view.depth, 2.0, rtol=1e-6)
+    _tum(tmp_path / "tum")
+    k = dict(intrinsics=(50.0, 50.0, 31.5, 23.5))
+    assert [f.depth_scale for f in read_frames("tum", tmp_path / "tum", **k)] == [1 / 5000] * 2
+    assert [f.depth_scale for f in read_frames("tum", tmp_path / "tum", depth_scale=0.001, **k)] == [0.001] * 2
+    with pytest.raises(ValueError, match="depth_scale"):
+        read_frames("tum", tmp_path / "tum", depth_scale=-1.0, **k)
+    own = dict(frame, camera_angle_x=math.pi / 2)
+    (tmp_path / "t2.json").write_text(json.dumps({"fl_x": 100, "w": 64, "h": 48, "frames": [own, frame]}))
+    f_own, f_top = read_frames("nerf", tmp_path / "t2.json")
+    assert f_own.camera.fx == pytest.approx(32.0) and f_own.camera.fy == pytest.approx(32.0)
+    assert f_top.camera.fx == 100.0

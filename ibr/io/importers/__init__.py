@@ -32,14 +32,19 @@ def read_frames(fmt: str, src, *, images=None, depth=None, depth_scale: float | 
     """Frames of ``src`` in format ``fmt`` (one of :data:`FORMATS`), nothing written.
 
     ``images``: COLMAP's image folder (default: ``src``'s parent's ``images``); ``depth``: COLMAP
-    depth folder; ``depth_scale``: scene units per stored depth unit; ``intrinsics``: TUM
+    depth folder; ``depth_scale``: scene units per stored depth unit (every format; for nerf it
+    replaces the file's own factor, for tum the benchmark's 1/5000 m); ``intrinsics``: TUM
     ``(fx, fy, cx, cy)``; ``tolerance``: TUM time association in seconds.
     """
     src = Path(src)
+    if depth_scale is not None:
+        from ...base.validate import check_positive
+
+        depth_scale = check_positive("depth_scale", depth_scale)
     if fmt == "nerf":
         from .nerf import read_transforms
 
-        return read_transforms(src, report)
+        return read_transforms(src, report, depth_scale=depth_scale)
     if fmt == "colmap":
         from .colmap import read_colmap
 
@@ -48,7 +53,8 @@ def read_frames(fmt: str, src, *, images=None, depth=None, depth_scale: float | 
     if fmt == "tum":
         from .tum import TUM_INTRINSICS, read_tum
 
-        return read_tum(src, intrinsics=intrinsics or TUM_INTRINSICS, tolerance=tolerance, report=report)
+        return read_tum(src, intrinsics=intrinsics or TUM_INTRINSICS, tolerance=tolerance, report=report,
+                        depth_scale=depth_scale)
     raise ValueError(f"format: expected one of {', '.join(FORMATS)}, got {fmt!r}")
 
 

@@ -45,7 +45,10 @@ def _number(where: str, doc: dict, key: str, *, positive: bool = True) -> float:
 
 
 def _camera(where: str, top: dict, frame: dict, size: tuple[int, int] | None, pose) -> Camera:
-    d = {**{k: top[k] for k in _INTRINSIC_KEYS + _DISTORTION_KEYS if k in top},
+    # a frame's own focal length, given either way, replaces the top level's for that axis
+    shadowed = {k for axis in (("fl_x", "camera_angle_x"), ("fl_y", "camera_angle_y"))
+                if any(a in frame for a in axis) for k in axis}
+    d = {**{k: top[k] for k in _INTRINSIC_KEYS + _DISTORTION_KEYS if k in top and k not in shadowed},
          **{k: frame[k] for k in _INTRINSIC_KEYS + _DISTORTION_KEYS if k in frame}}
     for k in _DISTORTION_KEYS:
         if k in d and _number(where, d, k, positive=False) != 0.0:
@@ -99,8 +102,10 @@ def _resolve(base: Path, name, where: str, key: str) -> Path:
     return p
 
 
-def read_transforms(path, report: ImportReport | None = None) -> list[Frame]:
-    """Frames of a ``transforms.json`` (see the module docstring), in file order."""
+def read_transforms(path, report: ImportReport | None = None, *, depth_scale: float | None = None) -> list[Frame]:
+    """Frames of a ``transforms.json`` (see the module docstring), in file order.
+    ``depth_scale`` (scene units per stored depth unit), when given, replaces the file's
+    ``depth_unit_scale_factor`` / ``integer_depth_scale``."""
     path = Path(path)
     top = read_json(path, "transforms")
     if not isinstance(top, dict) or not isinstance(top.get("frames"), list) or not top["frames"]:
@@ -114,6 +119,8 @@ def read_transforms(path, report: ImportReport | None = None) -> list[Frame]:
         scale = _number(f"transforms {path.name}", top, "depth_unit_scale_factor")
     elif "integer_depth_scale" in top:
         scale = _number(f"transforms {path.name}", top, "integer_depth_scale")
+    if depth_scale is not None:
+        scale = depth_scale
     frames, size = [], None
     for i, fr in enumerate(top["frames"]):
         where = f"transforms {path.name}: frames[{i}]"

@@ -64,8 +64,9 @@ def associate(times: list[float], others: list[float], tolerance: float) -> list
 
 
 def read_tum(folder, *, intrinsics=TUM_INTRINSICS, size=None, tolerance: float = 0.02,
-             report: ImportReport | None = None) -> list[Frame]:
-    """Frames of a TUM RGB-D sequence folder (see the module docstring), in time order."""
+             report: ImportReport | None = None, depth_scale: float | None = None) -> list[Frame]:
+    """Frames of a TUM RGB-D sequence folder (see the module docstring), in time order;
+    ``depth_scale`` (scene units per depth code) replaces the benchmark's 1/5000 m."""
     folder = Path(folder)
     if not (isinstance(tolerance, (int, float)) and tolerance > 0):
         raise ValueError(f"tolerance: expected a positive number of seconds, got {tolerance!r}")
@@ -110,7 +111,8 @@ def read_tum(folder, *, intrinsics=TUM_INTRINSICS, size=None, tolerance: float =
             cam = Camera(fx, fy, cx, cy, int(size[0]), int(size[1]), pose)
         except ValueError as exc:  # a focal length <= 0 from --intrinsics, ...
             raise ValueError(f"tum: the camera of {name}: {exc}") from None
-        frames.append(Frame(f"tum_{t:.6f}".replace(".", "_"), color, cam, dpath, TUM_DEPTH_SCALE))
+        frames.append(Frame(f"tum_{t:.6f}".replace(".", "_"), color, cam, dpath,
+                            TUM_DEPTH_SCALE if depth_scale is None else depth_scale))
     if not frames:
         raise ValueError(f"tum: no colour frame of {folder} has both a depth frame and a pose within "
                          f"{tolerance:g} s")
