@@ -327,3 +327,21 @@ def test_depth_scale_and_per_frame_focal_length_of_every_format(tmp_path):
     f_own, f_top = read_frames("nerf", tmp_path / "t2.json")
     assert f_own.camera.fx == pytest.approx(32.0) and f_own.camera.fy == pytest.approx(32.0)
     assert f_top.camera.fx == 100.0
+
+
+def test_export_nerf_never_writes_over_an_input_and_writes_whole_files(tmp_path):
+    """The library call wrote ``transforms.json`` in place: with ``out`` a view file it replaced
+    the view (no longer loadable). It now refuses any input (views, their images) by name, and
+    writes through a temporary file renamed into place."""
+    from ibr.io import save_view
+
+    cam = Camera(10.0, 10.0, 1.5, 1.5, 4, 4)
+    save_view(View(np.zeros((4, 4, 3), np.uint8), np.ones((4, 4), np.float32), cam, "a"), tmp_path / "a.json")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    for target in before:
+        with pytest.raises(ValueError, match="out: .* is one of the inputs"):
+            export_nerf([tmp_path / "a.json"], tmp_path / target)
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+    export_nerf([tmp_path / "a.json"], tmp_path / "t.json")
+    assert json.loads((tmp_path / "t.json").read_text())["frames"][0]["file_path"] == "a_color.png"
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(list(before) + ["t.json"])  # no temporary left

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ...base.camera import Camera
-from ..images import read_image
+from ..images import atomic_path, read_image
 from ..view_files import load_view, read_json
 from .common import SEQUENCE_FORMAT, Frame, ImportReport, check_foreign_keys
 from .conventions import gl_from_ours, ours_from_gl
@@ -182,9 +182,12 @@ def write_transforms(view_paths, out, *, base=None) -> list[str]:
     out = Path(out)
     base = Path(base) if base is not None else out.parent
     frames, cams, notes = [], [], []
+    inputs = {Path(p).resolve() for p in view_paths}  # never written over: manifests, views, their images
     for vp in _expand(view_paths):
         view = load_view(vp)
         doc = json.loads(vp.read_text())
+        inputs |= {vp.resolve()} | {(vp.parent / doc[k]["path"] if isinstance(doc[k], dict) else vp.parent / doc[k]).resolve()
+                                     for k in ("color", "depth") if doc.get(k)}
         cam = view.camera
         cams.append(cam)
         fr = {"file_path": os.path.relpath(vp.parent / doc["color"], base),
@@ -212,5 +215,9 @@ def write_transforms(view_paths, out, *, base=None) -> list[str]:
     top["frames"] = frames
     if any("depth_file_path" in fr for fr in frames):
         top["depth_unit_scale_factor"] = 1.0
-    out.write_text(json.dumps(top, indent=2) + "\n")
+    if out.resolve() in inputs:
+        raise ValueError(f"out: {out} is one of the inputs (a view file, a manifest or an image they name); "
+                         "choose another file")
+    with atomic_path(out) as tmp:  # nothing half-written: renamed into place once complete
+        tmp.write_text(json.dumps(top, indent=2) + "\n")
     return notes
