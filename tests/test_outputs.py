@@ -97,7 +97,15 @@ def test_plan_failure_leaves_everything_as_it_was(tmp_path, failure):
     assert (tmp_path / "old.png").read_bytes() == b"old"
 
 
-def test_plan_rolls_back_when_a_rename_fails(tmp_path, monkeypatch):
+@pytest.mark.parametrize("hard_links", [True, False])
+def test_plan_rolls_back_when_a_rename_fails(tmp_path, monkeypatch, hard_links):
+    """A rename failing half way puts the replaced files back, also where the file system has no
+    hard links (the backup was skipped there and the rollback deleted the user's file)."""
+    if not hard_links:
+        def no_link(*args, **kwargs):
+            raise OSError(1, "hard links not supported")
+
+        monkeypatch.setattr(os, "link", no_link)
     for n in ("a.png", "b.png"):
         (tmp_path / n).write_bytes(b"old " + n.encode())
     real = os.replace

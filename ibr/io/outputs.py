@@ -398,9 +398,11 @@ class OutputPlan:
             for i, (src, dst, stage) in enumerate(moves):
                 if dst.exists() and not dst.is_symlink():
                     backup = stage / f".backup-{i}"
-                    with contextlib.suppress(OSError):
+                    try:  # the old file, to put back if a later rename fails
                         os.link(dst, backup)
-                        backups.append((backup, dst))
+                    except OSError:  # no hard links here (some file systems): a copy; if that fails
+                        shutil.copy2(dst, backup)  # too, nothing has been replaced yet: roll back
+                    backups.append((backup, dst))
                     with contextlib.suppress(OSError):
                         os.chmod(src, dst.stat().st_mode & 0o7777)
                 os.replace(src, dst)
