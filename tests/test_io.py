@@ -103,6 +103,7 @@ def test_jpeg_is_uint8_and_close(tmp_path):
     "name,array,match",
     [("a.png", np.zeros((4, 4), np.float32), r"\.png file stores uint8 or uint16, got float32"),
      ("a.jpg", np.zeros((4, 4, 3), np.uint16), r"\.jpg file stores uint8, got uint16"),
+     ("a.jpg", np.zeros((4, 4, 4), np.uint8), "a JPEG file holds 1 or 3 channels, got 4"),  # alpha was dropped
      ("a.exr", np.zeros((4, 4), np.float64), r"\.exr file stores float32 or float16 or uint32, got float64"),
      ("a.bmp", np.zeros((4, 4), np.uint8), "unsupported extension '.bmp'"),
      ("a.png", np.zeros((4, 4, 2, 2), np.uint8), "expected 2 or 3 dimensions"),

@@ -269,6 +269,9 @@ def write_image(path, array) -> None:
         return
     if arr.ndim == 2:
         arr = arr[..., None]
+    if ext in (".jpg", ".jpeg") and arr.shape[2] not in (1, 3):  # JPEG would drop alpha silently
+        raise ValueError(f"array: a JPEG file holds 1 or 3 channels, got {arr.shape[2]} for {path.name} "
+                         "(write .png or .tif to keep them all)")
     oiio = _oiio()
     typedesc = {"uint8": oiio.UINT8, "uint16": oiio.UINT16, "uint32": oiio.UINT32,
                 "float16": oiio.HALF, "float32": oiio.FLOAT}[arr.dtype.name]
@@ -292,8 +295,8 @@ def write_image(path, array) -> None:
                 raise OSError(f"{path}: write failed: {_one_line(error)}")
         finally:
             closed = out.close()
-        error = out.geterror()
-        if not closed or error:  # nothing is renamed into place: atomic_path drops the temporary file
+        error = out.geterror()  # read (and cleared) either way: TIFF's close notes a harmless Exif message
+        if not closed:  # nothing is renamed into place: atomic_path drops the temporary file
             raise OSError(f"{path}: write failed when closing the file: {_one_line(error)}")
 
 
