@@ -345,3 +345,20 @@ def test_export_nerf_never_writes_over_an_input_and_writes_whole_files(tmp_path)
     export_nerf([tmp_path / "a.json"], tmp_path / "t.json")
     assert json.loads((tmp_path / "t.json").read_text())["frames"][0]["file_path"] == "a_color.png"
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(list(before) + ["t.json"])  # no temporary left
+
+
+def test_matrix_entries_and_manifest_views_are_checked(tmp_path):
+    """A ``transform_matrix`` of strings or booleans was converted by numpy and imported; a
+    manifest whose ``views`` is not a list of names crashed the exporter (TypeError) or read a
+    string letter by letter. Both are refused by name."""
+    write_image(tmp_path / "a.png", np.zeros((4, 4, 3), np.uint8))
+    for rows in ([[str(x) for x in r] for r in np.eye(4).tolist()], [[bool(x) for x in r] for r in np.eye(4)]):
+        t = {"fl_x": 10, "w": 4, "h": 4, "frames": [{"file_path": "a.png", "transform_matrix": rows}]}
+        (tmp_path / "t.json").write_text(json.dumps(t))
+        with pytest.raises(ValueError, match=r"frames\[0\]: bad 'transform_matrix': expected rows of numbers"):
+            read_frames("nerf", tmp_path / "t.json")
+    for views in ([1], "abc"):
+        (tmp_path / "seq.json").write_text(json.dumps({"format": "ibr-sequence", "version": 1, "views": views}))
+        with pytest.raises(ValueError, match="'views' must be a non-empty list of view file names"):
+            export_nerf([tmp_path / "seq.json"], tmp_path / "out.json")
+    assert not (tmp_path / "out.json").exists()

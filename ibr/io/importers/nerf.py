@@ -131,8 +131,12 @@ def read_transforms(path, report: ImportReport | None = None, *, depth_scale: fl
             raise ValueError(f"{where}: no 'transform_matrix' (camera-to-world pose)")
         if "file_path" not in fr:
             raise ValueError(f"{where}: no 'file_path'")
+        rows = fr["transform_matrix"]
+        if not (isinstance(rows, list) and all(isinstance(r, list) and all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) for x in r) for r in rows)):
+            raise ValueError(f"{where}: bad 'transform_matrix': expected rows of numbers (JSON arrays), got {rows!r:.80}")
         try:
-            pose = ours_from_gl(np.asarray(fr["transform_matrix"], np.float64))
+            pose = ours_from_gl(np.asarray(rows, np.float64))
         except (TypeError, ValueError) as exc:
             raise ValueError(f"{where}: bad 'transform_matrix': {exc}") from None
         color = _resolve(path.parent, fr["file_path"], where, "file_path")
@@ -161,7 +165,9 @@ def _expand(paths) -> list[Path]:
         except (OSError, ValueError):
             doc = None
         if isinstance(doc, dict) and doc.get("format") == SEQUENCE_FORMAT:
-            items = [p.parent / v for v in doc.get("views", [])]
+            from ...sequence.files import load_sequence  # the manifest's schema, strictly
+
+            items = list(load_sequence(p).views)
         else:
             items = [p]
         for q in items:
