@@ -448,3 +448,27 @@ def test_png_is_written_at_the_faster_zlib_level(tmp_path):
     assert cmf & 0x0F == 8 and (cmf * 256 + flg) % 31 == 0  # deflate, a valid zlib header
     assert PNG_COMPRESSION_LEVEL == 4 and flg >> 6 == 1
     np.testing.assert_array_equal(read_image(path), img)
+
+
+def test_brackets_in_names_survive_and_load_camera_checks_the_version(tmp_path):
+    """The JSON writer put every bracketed list of numbers on one line, also inside strings: a
+    view named "take [ 2 ]" came back "take [2]", and a colour file "shot [1,  2].png" was
+    written under that name but recorded as "shot [1, 2].png" (the view no longer loaded).
+    ``load_camera`` read a view file of an unknown version that ``load_view`` refuses."""
+    import json
+
+    from ibr import Camera, View
+    from ibr.io import load_camera, load_view, save_view
+
+    cam = Camera(10.0, 10.0, 1.5, 1.5, 4, 4)
+    v = View(np.zeros((4, 4, 3), np.uint8), None, cam, "take [ 2 ]")
+    save_view(v, tmp_path / "a.json", color_name="shot [1,  2].png")
+    back = load_view(tmp_path / "a.json")
+    assert back.name == "take [ 2 ]" and (tmp_path / "shot [1,  2].png").is_file()
+    doc = json.loads((tmp_path / "a.json").read_text())
+    assert '"world_from_cam": [' in (tmp_path / "a.json").read_text()  # poses still one row per line
+    doc["version"] = 99
+    (tmp_path / "c.json").write_text(json.dumps(doc))
+    for load in (load_view, load_camera):
+        with pytest.raises(ValueError, match="unsupported 'version' 99"):
+            load(tmp_path / "c.json")

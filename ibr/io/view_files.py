@@ -228,9 +228,7 @@ def load_view(path) -> View:
     if doc.get("format") != VIEW_FORMAT:
         raise ValueError(f"{where}: 'format' must be {VIEW_FORMAT!r}, got {doc.get('format')!r}")
     check_keys(where, doc, VIEW_KEYS)  # unknown keys ("dpeth", "pose") are refused, never ignored (#12)
-    version = doc.get("version")
-    if isinstance(version, bool) or version != VIEW_VERSION:
-        raise ValueError(f"{where}: unsupported 'version' {version!r} (this reader knows {VIEW_VERSION})")
+    _check_version(where, doc)
     for key in ("color", "camera"):
         if key not in doc:
             raise ValueError(f"{where}: missing key {key!r}")
@@ -295,6 +293,12 @@ def load_view(path) -> View:
     return view
 
 
+def _check_version(where: str, doc: dict) -> None:
+    version = doc.get("version")
+    if isinstance(version, bool) or version != VIEW_VERSION:
+        raise ValueError(f"{where}: unsupported 'version' {version!r} (this reader knows {VIEW_VERSION})")
+
+
 def load_camera(path, *, what: str = "camera file") -> Camera:
     """A :class:`~ibr.base.camera.Camera` from a view file (its camera; colour and depth are not
     read) or from a bare camera JSON object, optionally wrapped as ``{"camera": {...}}``.
@@ -318,6 +322,7 @@ def load_camera(path, *, what: str = "camera file") -> Camera:
         if doc["format"] != VIEW_FORMAT:
             raise ValueError(f"{where}: 'format' must be {VIEW_FORMAT!r}, got {doc['format']!r}")
         check_keys(where, doc, VIEW_KEYS)
+        _check_version(where, doc)  # as load_view: a newer file's camera may mean something else
         if "camera" not in doc:
             raise ValueError(f"{where}: missing key 'camera'")
         doc = doc["camera"]
@@ -351,10 +356,18 @@ def _default_depth_ext(encoding: str) -> str:
     return ".png" if encoding == "fixed16" else ".exr"
 
 
+#: A JSON string literal (skipped as a whole) or a list of numbers (put on one line).
+_STRING_OR_NUMBER_LIST = re.compile(r'"(?:[^"\\]|\\.)*"|\[[-+0-9.eE,\s]*\]')
+
+
 def _dumps(doc: dict) -> str:
-    """Indented JSON with every list of numbers on one line (readable 4x4 poses)."""
-    text = json.dumps(doc, indent=2, allow_nan=False)
-    return re.sub(r"\[[-+0-9.eE,\s]*\]", lambda m: re.sub(r"\s+", " ", m.group(0)).replace("[ ", "[").replace(" ]", "]"), text) + "\n"
+    """Indented JSON with every list of numbers on one line (readable 4x4 poses); brackets inside
+    strings (names, file names) are left as they are."""
+    def one_line(m):
+        t = m.group(0)
+        return t if t.startswith('"') else re.sub(r"\s+", " ", t).replace("[ ", "[").replace(" ]", "]")
+
+    return _STRING_OR_NUMBER_LIST.sub(one_line, json.dumps(doc, indent=2, allow_nan=False)) + "\n"
 
 
 def save_view(view: View, path, *, color_name: str | None = None, depth_name: str | None = None,
