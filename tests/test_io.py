@@ -472,3 +472,19 @@ def test_brackets_in_names_survive_and_load_camera_checks_the_version(tmp_path):
     for load in (load_view, load_camera):
         with pytest.raises(ValueError, match="unsupported 'version' 99"):
             load(tmp_path / "c.json")
+
+
+def test_blender_no_surface_markers_only_in_depth_passes(tmp_path):
+    """1e10 and 65504 mean "no surface" in Blender's depth passes; a z' buffer or a disparity map
+    holding exactly 65504 lost that pixel (read as NaN). z' = 2^24 (1 - near / z) with far = inf
+    is 65504 at z = 1 for this near."""
+    near = 1 - 65504 / 2**24
+    z = np.full((2, 2), 3.0, np.float32)
+    z[0, 0] = 1.0
+    cam = Camera(1.0, 1.0, 0.5, 0.5, 2, 2)
+    save_view(View(np.zeros((2, 2, 3), np.uint8), z, cam), tmp_path / "zp.json", depth_encoding="zprime",
+              depth_params={"near": near, "far": float("inf")})
+    back = load_view(tmp_path / "zp.json").depth
+    assert np.isfinite(back).all() and back[0, 0] == pytest.approx(1.0, rel=1e-6)
+    write_depth(tmp_path / "z.exr", np.array([[2.0, 65504.0], [1e10, 3.0]], np.float32))
+    assert np.isnan(read_depth(tmp_path / "z.exr")).sum() == 2  # a depth pass: both markers are no surface

@@ -382,7 +382,7 @@ def _depth_array(path: Path, channel: str | None, what: str) -> np.ndarray:
 
 
 def read_depth(path, *, scale: float | None = None, channel: str | None = None,
-               what: str = "depth") -> np.ndarray:
+               what: str = "depth", blender_markers: bool = True) -> np.ndarray:
     """Read a depth (or disparity, or any per-pixel scalar) file as float32, as tools write them.
 
     Parameters
@@ -400,6 +400,9 @@ def read_depth(path, *, scale: float | None = None, channel: str | None = None,
     channel : str, optional
         Channel name (exact, or the part after the last layer dot: ``"Depth.Z"`` finds
         ``ViewLayer.Depth.Z``).
+    blender_markers : bool
+        Read 1e10 and 65504 as "no surface" (depth passes); False for stored values that are no
+        depth pass (disparity, window depth, z'), where 65504 is a value like any other.
 
     Returns
     -------
@@ -419,7 +422,10 @@ def read_depth(path, *, scale: float | None = None, channel: str | None = None,
         return out.astype(np.float32)
     out = a.astype(np.float32)
     # Blender's Z pass where there is no surface: 1e10 (Cycles), the half-float maximum (EEVEE)
-    out[~np.isfinite(out) | (out == BACKGROUND_DEPTH) | (out == HALF_MAX)] = np.nan
+    invalid = ~np.isfinite(out)
+    if blender_markers:
+        invalid |= (out == BACKGROUND_DEPTH) | (out == HALF_MAX)
+    out[invalid] = np.nan
     return out * np.float32(1.0 if scale is None else scale)
 
 

@@ -191,7 +191,8 @@ def _read_stored_depth(path: Path, encoding: str, p: dict, where: str, channel: 
                 raise ValueError(f"{where}: {path} must hold non-negative integer codes for {encoding!r}")
             raw = raw.astype(np.uint32)
         return raw
-    return read_depth(path, scale=p.get("scale"), channel=channel, what=where)
+    # Blender's "no surface" values (1e10, 65504) only in depth passes, not in z' or disparities
+    return read_depth(path, scale=p.get("scale"), channel=channel, what=where, blender_markers=encoding in ("z", "range"))
 
 
 def _json_number(x: float):
