@@ -488,3 +488,18 @@ def test_blender_no_surface_markers_only_in_depth_passes(tmp_path):
     assert np.isfinite(back).all() and back[0, 0] == pytest.approx(1.0, rel=1e-6)
     write_depth(tmp_path / "z.exr", np.array([[2.0, 65504.0], [1e10, 3.0]], np.float32))
     assert np.isnan(read_depth(tmp_path / "z.exr")).sum() == 2  # a depth pass: both markers are no surface
+
+
+def test_fixed_codes_out_of_range_name_the_view_file(tmp_path):
+    """A fixed16 depth file holding 70000 said only "q: codes must lie in [0, 65535]"; it names
+    the view file, the key and the file now, like the window encodings."""
+    import json
+
+    cam = Camera(1.0, 1.0, 1.5, 1.5, 4, 4)
+    write_image(tmp_path / "c.png", np.zeros((4, 4, 3), np.uint8))
+    write_depth(tmp_path / "d.exr", np.full((4, 4), 70000.0, np.float32))
+    doc = {"format": "ibr-view", "version": 1, "color": "c.png", "camera": cam.to_dict(),
+           "depth": {"path": "d.exr", "encoding": "fixed16", "near": 0.1, "far": 10}}
+    (tmp_path / "v.json").write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match=r"v\.json: 'depth\.path' d\.exr: 16 value\(s\) outside \[0, 65535\]"):
+        load_view(tmp_path / "v.json")

@@ -272,8 +272,8 @@ def load_view(path) -> View:
         if not depth_path.is_file():
             raise FileNotFoundError(f"{where}: 'depth.path' refers to {_not_a_file(depth_path)}")
         stored = _read_stored_depth(depth_path, encoding, p, f"{where}: 'depth.path'", channel)
-        top = _WINDOW_RANGES.get(encoding)
-        if top is not None:  # a value outside would silently become a hole (a planar-z file, e.g.)
+        top = _WINDOW_RANGES.get(encoding, 2.0 ** _FIXED_BITS.get(encoding, 0) - 1)
+        if top > 0:  # a value outside would silently become a hole (a planar-z file, e.g.)
             with np.errstate(invalid="ignore"):
                 out = np.isfinite(stored) & ((stored < 0) | (stored > top))
             if out.any():
