@@ -503,3 +503,24 @@ def test_fixed_codes_out_of_range_name_the_view_file(tmp_path):
     (tmp_path / "v.json").write_text(json.dumps(doc))
     with pytest.raises(ValueError, match=r"v\.json: 'depth\.path' d\.exr: 16 value\(s\) outside \[0, 65535\]"):
         load_view(tmp_path / "v.json")
+
+
+def test_integer_depth_codes_carry_their_step_whatever_the_extension(tmp_path):
+    """Integer depth codes were recognised by the ``.png`` extension only: the same millimetre
+    codes in a uint16 TIFF got no quantization step (the step the mesh builder reads)."""
+    import json
+
+    from ibr.base.depth import quantization_of
+
+    cam = Camera(1.0, 1.0, 1.5, 1.5, 4, 4)
+    write_image(tmp_path / "c.png", np.zeros((4, 4, 3), np.uint8))
+    steps = []
+    for ext in (".png", ".tif"):
+        write_image(tmp_path / f"d{ext}", np.full((4, 4), 2000, np.uint16))
+        doc = {"format": "ibr-view", "version": 1, "color": "c.png", "camera": cam.to_dict(),
+               "depth": {"path": f"d{ext}", "encoding": "z", "scale": 0.001}}
+        (tmp_path / f"v{ext}.json").write_text(json.dumps(doc))
+        v = load_view(tmp_path / f"v{ext}.json")
+        assert np.allclose(v.depth, 2.0)
+        steps.append(quantization_of(v))
+    assert steps[0] is not None and steps[1] == steps[0]

@@ -412,7 +412,14 @@ def read_depth(path, *, scale: float | None = None, channel: str | None = None,
         raise ValueError(f"{what}: channel must be a non-empty string, got {channel!r}")
     if scale is not None and not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
         raise ValueError(f"{what}: scale must be a positive number, got {scale!r}")
-    a = _depth_array(Path(path), channel, what)
+    return _depth_values(_depth_array(Path(path), channel, what), path, scale=scale, what=what,
+                        blender_markers=blender_markers)
+
+
+def _depth_values(a: np.ndarray, path, *, scale: float | None = None, what: str = "depth",
+                 blender_markers: bool = True) -> np.ndarray:
+    """The stored array ``a`` of the depth file ``path`` as :func:`read_depth` returns it
+    (integer codes times ``scale``, code 0 NaN; floats with their invalid values NaN)."""
     if a.dtype.kind in "ui":
         if scale is None:
             raise ValueError(f"{what}: {path} stores integer codes ({a.dtype}); give `scale` "

@@ -30,8 +30,8 @@ from ..base import depth as _depth
 from ..base.camera import Camera
 from ..base.validate import check_keys, check_relative_path, nearest_name
 from ..base.view import View
-from .images import (_depth_array, _require_file, atomic_path, check_write_dtype, read_depth, read_image, write_depth,
-                     write_image)
+from .images import (_depth_array, _depth_values, _require_file, atomic_path, check_write_dtype, read_image,
+                     write_depth, write_image)
 
 __all__ = ["DEPTH_ENCODINGS", "VIEW_FORMAT", "VIEW_KEYS", "VIEW_VERSION", "load_camera", "load_view", "save_view",
            "view_to_dict"]
@@ -183,16 +183,20 @@ def _at_far(stored: np.ndarray, encoding: str) -> np.ndarray:
     return stored <= 0 if encoding == "reversed" else stored >= _WINDOW_RANGES[encoding]
 
 
-def _read_stored_depth(path: Path, encoding: str, p: dict, where: str, channel: str | None = None) -> np.ndarray:
+def _read_stored_depth(path: Path, encoding: str, p: dict, where: str,
+                       channel: str | None = None) -> tuple[np.ndarray, bool]:
+    """The depth file's values as stored (fixed codes) or scaled (:func:`read_depth`), and whether
+    the file holds integer codes (whatever its extension: a uint16 TIFF as a 16-bit PNG)."""
+    raw = _depth_array(path, channel, where)
     if encoding in _FIXED_BITS:
-        raw = _depth_array(path, channel, where)
         if raw.dtype.kind == "f":  # codes stored in a float file must be integers
             if not np.all(np.isfinite(raw) & (raw == np.rint(raw)) & (raw >= 0)):
                 raise ValueError(f"{where}: {path} must hold non-negative integer codes for {encoding!r}")
-            raw = raw.astype(np.uint32)
-        return raw
+            return raw.astype(np.uint32), True
+        return raw, True
     # Blender's "no surface" values (1e10, 65504) only in depth passes, not in z' or disparities
-    return read_depth(path, scale=p.get("scale"), channel=channel, what=where, blender_markers=encoding in ("z", "range"))
+    return (_depth_values(raw, path, scale=p.get("scale"), what=where, blender_markers=encoding in ("z", "range")),
+            raw.dtype.kind in "ui")
 
 
 def _json_number(x: float):
@@ -271,7 +275,7 @@ def load_view(path) -> View:
         depth_path = path.parent / spec["path"]
         if not depth_path.is_file():
             raise FileNotFoundError(f"{where}: 'depth.path' refers to {_not_a_file(depth_path)}")
-        stored = _read_stored_depth(depth_path, encoding, p, f"{where}: 'depth.path'", channel)
+        stored, integer = _read_stored_depth(depth_path, encoding, p, f"{where}: 'depth.path'", channel)
         top = _WINDOW_RANGES.get(encoding, 2.0 ** _FIXED_BITS.get(encoding, 0) - 1)
         if top > 0:  # a value outside would silently become a hole (a planar-z file, e.g.)
             with np.errstate(invalid="ignore"):
@@ -290,7 +294,7 @@ def load_view(path) -> View:
         raise type(exc)(f"{where}: {exc}") from None
     if z is not None:  # the encoding's quantization step ('step' stored units per code), for build_mesh (#11)
         _depth.set_quantization(view, _depth.DepthQuantization.from_encoding(
-            encoding, p, integer=depth_path.suffix.lower() == ".png"))
+            encoding, p, integer=integer))
     return view
 
 
