@@ -235,3 +235,16 @@ def test_far_plane_precision_of_16_and_24_bit_buffers():
     assert np.max(err24) < 3.1e-3
     # Linear 16-bit storage (z codes with scale) would have a constant 1.5 mm step instead:
     assert f / 65535 < step16.min() / 500
+
+
+def test_zbuffer_step_with_an_infinite_far_plane():
+    """far = inf is accepted everywhere; the step was inf / inf = NaN. With z = n / (1 - w) the
+    step of one code is z(w + 1/(2^b - 1)) - z(w): for 24 bits and n = 0.1 about
+    z^2 / (n (2^24 - 1)), 5.96e-7 at z = 1."""
+    n, bits = 0.1, 24
+    z = np.array([1.0, 10.0])
+    step = D.zbuffer_step(z, near=n, far=np.inf, bits=bits)
+    w = 1 - n / z
+    exact = n / (1 - (w + 1 / (2**bits - 1))) - z
+    np.testing.assert_allclose(step, exact, rtol=1e-6)
+    np.testing.assert_allclose(step, z**2 / (n * (2**bits - 1)), rtol=1e-4)

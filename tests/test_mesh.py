@@ -474,3 +474,24 @@ def test_cli_mesh(tmp_path, capsys):
     assert cli.main(["mesh", str(tmp_path / "nope.json")]) == 1
     assert cli.main(["mesh", str(src), "--obj", str(tmp_path / "no" / "o.obj")]) == 1
     assert "output folder" in capsys.readouterr().err
+
+
+def test_a_mesh_without_quads_and_a_denormal_depth():
+    """An all-NaN view gives a valid mesh of 0 quads; its depth() indexed an empty plane array
+    (IndexError). A depth of 5e-310 is finite and positive but its 1/z overflows: segment()
+    took it as valid and then dropped it from every rect; it is no depth, like NaN, now."""
+    from ibr.mesh.quad_mesh import _mesh_from_segmentation
+
+    cam = Camera(100.0, 100.0, 1.5, 1.5, 4, 4)
+    empty = build_mesh(View(np.zeros((4, 4, 3), np.uint8), np.full((4, 4), np.nan, np.float32), cam),
+                       near=1.0, far=10.0, threshold=2.0**15)
+    assert len(empty) == 0 and np.isnan(empty.depth()).all()
+    z = np.full((4, 6), 2.0)
+    z[1, 2] = 5e-310
+    cam6 = Camera(100.0, 100.0, 2.5, 1.5, 6, 4)
+    s = S.segment(z, camera=cam6)
+    m = _mesh_from_segmentation(cam6, z, s, 0.0)
+    expect = np.full((4, 6), 2.0, np.float32)
+    expect[1, 2] = np.nan
+    np.testing.assert_allclose(m.depth(), expect, rtol=1e-6)
+    assert m.quad_of_pixel[1, 2] == -1 and (m.quad_of_pixel[np.isfinite(expect)] >= 0).all()

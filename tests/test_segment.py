@@ -296,9 +296,9 @@ def test_inv_depth_range_matches_numpy(dtype):
     z = z.astype(dtype)
     q, lo, hi, n = K.inv_depth_range(z)
     z64 = z.astype(np.float64)
-    valid = np.isfinite(z64) & (z64 > 0)
     with np.errstate(divide="ignore", over="ignore"):
-        ref = np.where(valid, 1.0 / z64, np.nan)  # 1/1e-310 overflows to inf, as in the kernel
+        valid = np.isfinite(z64) & (z64 > 0) & np.isfinite(1.0 / z64)  # 1/1e-310 overflows: no depth
+        ref = np.where(valid, 1.0 / z64, np.nan)
     assert q.dtype == np.float64 and np.array_equal(q, ref, equal_nan=True)
     assert (lo, hi, n) == (z64[valid].min(), z64[valid].max(), valid.sum())
     assert type(lo) is float and type(n) is int

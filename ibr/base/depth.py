@@ -257,9 +257,12 @@ def zbuffer_step(z, *, near: float, far: float, bits: int) -> np.ndarray:
     # The far plane itself (w = 1) is the last code; allow for rounding of w computed from z.
     has_next = w_next <= 1 + 1e-9
     w_next = np.minimum(w_next, 1.0)
+    def z_of(wv):  # the exact inverse in float64, also for an infinite far plane (n / (1 - w))
+        return n / (1 - wv) if np.isinf(f) else n * f / (f - wv * (f - n))
+
     with np.errstate(divide="ignore", invalid="ignore"):
-        z0 = n * f / (f - w * (f - n))
-        z1 = np.where(has_next, n * f / (f - w_next * (f - n)), np.nan)
+        z0 = z_of(w)
+        z1 = np.where(has_next, z_of(w_next), np.nan)
     return z1 - z0
 
 

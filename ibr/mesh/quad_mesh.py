@@ -149,6 +149,8 @@ class QuadMesh:
 def mesh_depth(mesh: QuadMesh) -> np.ndarray:
     """Planar depth z of the mesh evaluated at every source pixel center, NaN where no quad."""
     h, w = mesh.shape
+    if len(mesh.inv_depth_planes) == 0:  # no quad (e.g. an all-NaN view): nothing to evaluate
+        return np.full((h, w), np.nan, np.float32)
     out = np.empty((h, w), np.float32)
     u = np.arange(w, dtype=np.float64)
     rows = max(1, (1 << 16) // max(w, 1))  # strips of rows: small temporaries (a 1080p mesh took 130 MB)
