@@ -165,9 +165,10 @@ def _expand(paths) -> list[Path]:
         except (OSError, ValueError):
             doc = None
         if isinstance(doc, dict) and doc.get("format") == SEQUENCE_FORMAT:
-            from ...sequence.files import load_sequence  # the manifest's schema, strictly
-
-            items = list(load_sequence(p).views)
+            names = doc.get("views")  # as ibr.sequence.load_sequence checks it (io may not import it)
+            if not isinstance(names, list) or not names or not all(isinstance(n, str) and n for n in names):
+                raise ValueError(f"sequence file {p}: 'views' must be a non-empty list of view file names, got {names!r}")
+            items = [p.parent / n for n in names]
         else:
             items = [p]
         for q in items:
