@@ -181,7 +181,7 @@ def run_interpolate(args) -> int:
         plan.add_input("SEQ", seq.source)
         for i, v in enumerate(seq.views):
             plan.add_view_input(f"SEQ view {i}", v)
-        out = plan.add_folder("--out", args.out, patterns=(f"frame_*{ext}", "frame_*_holes.png"))
+        out = plan.add_folder("--out", args.out, patterns=(f"frame_#{ext}", "frame_#_holes.png"))
         video = plan.add_file("--video", args.video, VIDEO_EXTS)
         report = plan.add_file("--report", args.report, JSON_EXTS)
         plan.check()
@@ -321,7 +321,7 @@ def run_stereo(args) -> int:
         plan.add_input("SEQ", seq.source)
         for i, v in enumerate(seq.views):
             plan.add_view_input(f"SEQ view {i}", v)
-        pats = ("stereo_*.png", "stereo_*_left.png", "stereo_*_right.png", "stereo_*_holes.png")
+        pats = ("stereo_#.png", "stereo_#_left.png", "stereo_#_right.png", "stereo_#_holes.png")
         out = plan.add_folder("-o", args.out, patterns=pats)
         video = plan.add_file("--video", args.video, VIDEO_EXTS)
         plan.check()
@@ -435,7 +435,7 @@ def run_samples_sequence(args) -> int:
     out = Path(args.out)
     keys_name, truth_name = f"{args.scene}_walk", f"{args.scene}_truth"
     pats = tuple(f"{n}{suffix}" for n in (keys_name, truth_name)
-                 for suffix in (".json", "_[0-9]*.json", "_[0-9]*_color.png", "_[0-9]*_depth.exr"))
+                 for suffix in (".json", "_#.json", "_#_color.png", "_#_depth.exr"))
     with OutputPlan("ibr samples", log=info) as plan:
         folder = plan.add_folder("--out", out, pats)
         plan.check()

@@ -187,7 +187,7 @@ def run(args) -> int:
             raise ValueError(f"-o: with --video, expected a folder for frame_0000.png ... (no extension) or a "
                              f"video file ({', '.join(VIDEO_EXTS)}), got {out}")
         if args.video is not None and not video_file:
-            plan.add_folder("-o", out, patterns=("frame_*.png",))
+            plan.add_folder("-o", out, patterns=("frame_#.png",))
         elif video_file:
             plan.add_file("-o", out, VIDEO_EXTS)
         elif face_folder:

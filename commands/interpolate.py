@@ -26,7 +26,7 @@ def add_arguments(parser) -> None:
                         help=f"bundled sample scene when no view files are given (default {SAMPLE_SCENE})")
     parser.add_argument("--out", default="out", metavar="DIR",
                         help="output folder (default: %(default)s); frames of an earlier run there "
-                             "(frame_*_t*.png/.exr) are replaced, other files are left alone")
+                             "(frame_NNN_tT.TTT.png/.exr, _holes.png) are replaced, other files are left alone")
     parser.add_argument("--fill", choices=("previous", "inpaint", "none"), default="previous",
                         help="hole filling: previous frame (seed step 7, default), depth-aware "
                              "background fill, or none")
@@ -192,7 +192,7 @@ def write_video(path, frames, fps: float) -> None:
 
 #: File-name patterns of the frames this command writes into ``--out`` (and removes from an
 #: earlier run there); nothing else in the folder is touched.
-FRAME_PATTERNS = ("frame_*_t*.png", "frame_*_t*.exr")
+FRAME_PATTERNS = tuple(f"frame_#_t{sign}#.#{tail}" for sign in ("", "-") for tail in (".png", "_holes.png", ".exr"))
 
 
 def run(args) -> int:

@@ -171,7 +171,7 @@ def _run_sequences(args) -> int:
         for s in seqs:
             for v in s.views:
                 plan.add_view_input("VIEW", v)
-        folder = plan.add_folder("-o", args.output, ("pano_*.png",) + (("pano_*_depth.exr",) if depth else ()))
+        folder = plan.add_folder("-o", args.output, ("pano_#.png",) + (("pano_#_depth.exr",) if depth else ()))
         plan.check()
         note_first_run("ibr.mesh._segment_kernels", "ibr.render._ray_kernels", warm="stitch")
         for k in progress(range(frames), frames, "stitch frames"):

@@ -78,7 +78,7 @@ def run(args) -> int:
     with OutputPlan("ibr timewarp", log=info) as plan:
         plan.add_view_input("VIEW", args.view)
         plan.add_input("--poses", args.poses)
-        out = plan.add_folder("-o", args.out, ("frame_[0-9][0-9][0-9][0-9]*.png",))
+        out = plan.add_folder("-o", args.out, ("frame_#.png",))
         plan.check()  # every output checked before any work (#12)
         view = load_view(args.view)
         m = args.margin

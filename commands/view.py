@@ -234,7 +234,7 @@ def run(args) -> int:
         plan.add_input("PANO", args.pano)
         if args.tour is not None:
             frames_dir = out if out.suffix == "" else out.with_name(out.stem + "_frames")
-            frames = plan.add_folder("-o (tour frames)", frames_dir, ("frame_[0-9][0-9][0-9][0-9]*.png",))
+            frames = plan.add_folder("-o (tour frames)", frames_dir, ("frame_#.png",))
             anim = plan.add_file("-o", out, ANIMATION_EXTS) if out.suffix else None
         else:
             image = plan.add_file("-o", out, IMAGE_EXTS)

@@ -461,3 +461,35 @@ except OSError as exc:
 
     np.testing.assert_array_equal(read_image(good), np.zeros((8, 8, 3), np.uint8))
     assert [p.name for p in tmp_path.iterdir()] == ["a.png"]  # no temporary file left
+
+
+@pytest.mark.parametrize("argv, written, users", [
+    (["interpolate", "{a}", "{b}", "--frames", "2", "--out", "{o}"], ["frame_000_t0.000.png", "frame_001_t1.000.png"],
+     ["frame_notes.png", "frame_intro_title.png", "frame_2024_poster.png"]),
+    (["stereo", "{seq}", "--auto", "-o", "{o}"], ["stereo_0000.png", "stereo_0001.png"], ["stereo_cover.png"]),
+    (["interpolate", "{seq}", "--factor", "1", "--out", "{o}"], ["frame_0000.png", "frame_0001.png"],
+     ["frame_notes.png", "frame_2024_poster.png"]),
+])
+def test_frame_folders_leave_look_alike_user_files_alone(tmp_path, argv, written, users):
+    """An existing output folder loses only the command's own frames of an earlier run. The
+    patterns were globs (``frame_*.png``, ``frame_*_t*.png``, ``stereo_*.png``) that took a
+    user's frame_notes.png, frame_intro_title.png, frame_2024_poster.png or stereo_cover.png;
+    ``#`` (one or more digits) in the patterns now keeps them."""
+    import json
+
+    from ibr.io.outputs import matches_patterns
+
+    base = make_base(tmp_path / "in")
+    seq = base / "seq.json"
+    seq.write_text(json.dumps({"format": "ibr-sequence", "version": 1, "views": ["a.json", "b.json"]}))
+    out = tmp_path / "o"
+    out.mkdir()
+    stale = written[0].replace("000", "099", 1) if "_t" in written[0] else written[0].replace("0000", "0099")
+    for n in users + [stale]:
+        (out / n).write_bytes(b"user")
+    args = [x.format(a=base / "a.json", b=base / "b.json", seq=seq, o=out) for x in argv]
+    assert cli.main(args) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(users + written), names  # the earlier run's frame (stale) is gone, users' files kept
+    assert all((out / n).read_bytes() == b"user" for n in users)
+    assert matches_patterns("frame_0007.png", ("frame_#.png",)) and not matches_patterns("frame_7a.png", ("frame_#.png",))

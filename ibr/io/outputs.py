@@ -19,7 +19,7 @@ How a command uses it
         plan.add_view_input("--to", args.to)         # a bare camera JSON is fine too
         out = plan.add_file("-o", args.output, IMAGE_EXTS)
         dep = plan.add_file("--depth-out", args.depth_out, DEPTH_EXTS)   # None if not given
-        frames = plan.add_folder("--out", args.out, patterns=("frame_*.png",))
+        frames = plan.add_folder("--out", args.out, patterns=("frame_#.png",))
         plan.check()                                 # raises before any work
         ...                                          # load, compute
         write_image(plan.stage(out), color)          # any writer, given the staged path
@@ -40,7 +40,8 @@ What :meth:`~OutputPlan.check` refuses (each message names the option and the us
 
 Frame folders
 -------------
-:meth:`~OutputPlan.add_folder` declares a folder of files named by ``patterns`` (globs). The folder
+:meth:`~OutputPlan.add_folder` declares a folder of files named by ``patterns`` (globs; ``#`` is one
+or more digits, so ``frame_#.png`` never takes a user's ``frame_notes.png``). The folder
 is either new (created at commit, staged as a whole and renamed into place) or existing: then
 commit moves the new files in and removes the files of the *same patterns* left by an earlier run
 (and only those), logging how many it removed. Other files in the folder are never touched.
@@ -58,7 +59,9 @@ from __future__ import annotations
 
 import contextlib
 import fnmatch
+import functools
 import os
+import re
 import shutil
 import signal
 import tempfile
@@ -76,6 +79,7 @@ __all__ = [
     "STAGING_PREFIX",
     "VIDEO_EXTS",
     "same_file",
+    "matches_patterns",
 ]
 
 #: Extensions :func:`ibr.io.write_image` writes (the dtype rules are checked by the writer).
@@ -133,6 +137,19 @@ def _remove_stale_staging(folder: Path) -> None:
             if pid.isdigit() and int(pid) != os.getpid() and not _pid_alive(int(pid)):
                 shutil.rmtree(entry.path, ignore_errors=True)
 
+
+
+@functools.lru_cache(maxsize=256)
+def _pattern_regex(pattern: str) -> re.Pattern:
+    return re.compile(fnmatch.translate(pattern).replace(re.escape("#"), "[0-9]+"))
+
+
+def matches_patterns(name: str, patterns) -> bool:
+    """Whether the file name ``name`` follows one of ``patterns``: globs (``*``, ``?``, ``[...]``,
+    case-sensitive) in which ``#`` stands for one or more digits. ``frame_#.png`` takes
+    ``frame_0007.png`` but not ``frame_notes.png`` or ``frame_2024_poster.png``, which ``frame_*.png``
+    took (and a command removed as an earlier run's frame)."""
+    return any(_pattern_regex(p).match(name) for p in patterns)
 
 @dataclass
 class _Output:
@@ -223,7 +240,8 @@ class OutputPlan:
         return p
 
     def add_folder(self, option: str, path, patterns: Iterable[str]) -> Path | None:
-        """Declare a frame folder whose files follow ``patterns`` (globs such as ``frame_*.png``).
+        """Declare a frame folder whose files follow ``patterns`` (globs in which ``#`` stands for
+        one or more digits, such as ``frame_#.png``: :func:`matches_patterns`).
 
         Existing files of these patterns are an earlier run's and are removed at commit; no
         other file of the folder is touched. Returns the folder path as given.
@@ -292,7 +310,7 @@ class OutputPlan:
                            or e.is_symlink())
         except OSError:
             return []
-        return [n for n in names if any(fnmatch.fnmatchcase(n, pat) for pat in o.patterns)]
+        return [n for n in names if matches_patterns(n, o.patterns)]
 
     def check(self) -> "OutputPlan":
         """Check every declared output and create the staging folders; raise before any work.
@@ -347,7 +365,7 @@ class OutputPlan:
             return o.staged
         if Path(name).name != name:
             raise ValueError(f"name: expected a plain file name inside {o.option}, got {name!r}")
-        if not any(fnmatch.fnmatchcase(name, pat) for pat in o.patterns):
+        if not matches_patterns(name, o.patterns):
             raise ValueError(f"name: {name!r} does not follow the patterns {', '.join(o.patterns)} "
                              f"of {o.option}")
         if name not in o.names:
@@ -384,7 +402,7 @@ class OutputPlan:
                 moves.append((o.staged, o.path, o.staged.parent))
                 continue
             o.names = sorted(e.name for e in os.scandir(o.staged))
-            odd = [n for n in o.names if not any(fnmatch.fnmatchcase(n, pat) for pat in o.patterns)]
+            odd = [n for n in o.names if not matches_patterns(n, o.patterns)]
             if odd:
                 raise ValueError(f"{o.option}: files {', '.join(odd)} do not follow the patterns "
                                  f"{', '.join(o.patterns)} of the frame folder")
