@@ -158,6 +158,27 @@ def _truth_sequence(args, seq, factor, n_out):
     return truth
 
 
+def _add_truth_inputs(plan, args, seq, truth) -> None:
+    """The ground-truth sequence (``--truth`` or the manifest's), its views and their images, as
+    inputs of ``plan``."""
+    from pathlib import Path
+
+    from ibr.sequence.files import load_sequence
+
+    path = Path(args.truth) if args.truth else seq.truth
+    if path is None:
+        return
+    if truth is None:  # declared but not scored (another factor): still not to be written over
+        try:
+            truth = load_sequence(path)
+        except (OSError, ValueError):
+            plan.add_input("ground truth", path)
+            return
+    plan.add_input("ground truth", truth.source)
+    for i, v in enumerate(truth.views):
+        plan.add_view_input(f"ground truth view {i}", v)
+
+
 def run_interpolate(args) -> int:
     """``ibr interpolate SEQ --factor F``: up-convert a whole sequence (see ibr.sequence.frame_rate)."""
     import json
@@ -181,6 +202,7 @@ def run_interpolate(args) -> int:
         plan.add_input("SEQ", seq.source)
         for i, v in enumerate(seq.views):
             plan.add_view_input(f"SEQ view {i}", v)
+        _add_truth_inputs(plan, args, seq, truth)  # scored or not, the ground truth is never written over
         out = plan.add_folder("--out", args.out, patterns=(f"frame_#{ext}", "frame_#_holes.png"))
         video = plan.add_file("--video", args.video, VIDEO_EXTS)
         report = plan.add_file("--report", args.report, JSON_EXTS)

@@ -217,3 +217,35 @@ def test_cli_samples_interpolate_and_stereo_over_a_sequence(tmp_path, capsys):
     # a sequence argument together with pair-only options is refused before any work
     assert cli.main(["interpolate", str(manifest), "--frames", "3", "--out", str(tmp_path / "x")]) == 1
     assert not (tmp_path / "x").exists()
+
+
+def test_ground_truth_sequences_are_inputs_never_outputs(tmp_path, capsys):
+    """``ibr interpolate SEQ`` did not count the ground truth (the manifest's or ``--truth``) as an
+    input: ``--report`` on the truth manifest or one of its views replaced it, and ``--out`` on a
+    truth folder of ``frame_NNNN`` views wrote over its images. All are refused before any work,
+    whether the truth is scored or not (another ``--factor``)."""
+    import shutil
+
+    seq = tmp_path / "seq"
+    assert cli.main(["samples", "--sequence", "--size", "48x36", "--keys", "3", "--factor", "2",
+                     "--out", str(seq)]) == 0
+    manifest = seq / "room_walk.json"
+    before = {p.name: p.read_bytes() for p in seq.iterdir()}
+    for factor in ("2", "3"):  # scored, and declared for another factor (not scored)
+        for victim in ("room_truth.json", "room_truth_0001.json"):
+            assert cli.main(["interpolate", str(manifest), "--factor", factor, "--out", str(tmp_path / "q"),
+                             "--report", str(seq / victim)]) == 1
+            assert "ground truth" in capsys.readouterr().err
+    gt = tmp_path / "gt"  # the truth as a folder of numbered views
+    gt.mkdir()
+    for j in range(6):
+        doc = json.loads((seq / f"room_truth_{j:04d}.json").read_text())
+        shutil.copy(seq / doc["color"], gt / f"frame_{j:04d}.png")
+        shutil.copy(seq / doc["depth"]["path"], gt / f"frame_{j:04d}_depth.exr")
+        doc["color"], doc["depth"]["path"] = f"frame_{j:04d}.png", f"frame_{j:04d}_depth.exr"
+        (gt / f"frame_{j:04d}.json").write_text(json.dumps(doc))
+    gt_before = {p.name: p.read_bytes() for p in gt.iterdir()}
+    assert cli.main(["interpolate", str(manifest), "--factor", "2", "--truth", str(gt), "--out", str(gt)]) == 1
+    assert "ground truth" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in gt.iterdir()} == gt_before
+    assert {p.name: p.read_bytes() for p in seq.iterdir()} == before
