@@ -493,3 +493,47 @@ def test_frame_folders_leave_look_alike_user_files_alone(tmp_path, argv, written
     assert names == sorted(users + written), names  # the earlier run's frame (stale) is gone, users' files kept
     assert all((out / n).read_bytes() == b"user" for n in users)
     assert matches_patterns("frame_0007.png", ("frame_#.png",)) and not matches_patterns("frame_7a.png", ("frame_#.png",))
+
+
+def test_outputs_clashing_with_a_frame_folder_or_behind_a_dangling_link(tmp_path, monkeypatch):
+    """Found by a hostile-input audit: (1) a contact sheet named like one of the frames of --out
+    in that folder replaced the frame (both outputs on one file); (2) --out a symbolic link to a
+    missing folder rendered everything, then failed naming the internal staging path; (3) an
+    output that was a symbolic link was deleted by the rollback of a failed commit."""
+    out = tmp_path / "o"
+    out.mkdir()
+    with pytest.raises(ValueError, match="--contact-sheet: .* is named like a frame of --out"):
+        with OutputPlan() as plan:
+            plan.add_folder("--out", out, ("frame_#_t#.#.png",))
+            plan.add_file("--contact-sheet", out / "frame_000_t0.250.png", IMAGE_EXTS)
+            plan.check()
+    with OutputPlan() as plan:  # another name in that folder is fine
+        plan.add_folder("--out", out, ("frame_#_t#.#.png",))
+        plan.add_file("--contact-sheet", out / "sheet.png", IMAGE_EXTS)
+        plan.check()
+    (tmp_path / "dl").symlink_to(tmp_path / "missing")
+    with pytest.raises(FileNotFoundError, match="--out: .*dl is a symbolic link to .*missing, which does not exist"):
+        with OutputPlan() as plan:
+            plan.add_folder("--out", tmp_path / "dl", ("frame_#.png",))
+            plan.check()
+    (tmp_path / "keep.png").write_bytes(b"kept")
+    (tmp_path / "a.png").symlink_to(tmp_path / "keep.png")
+    (tmp_path / "b.png").write_bytes(b"old b")
+    real = os.replace
+
+    def flaky(src, dst):
+        if Path(dst).name == "b.png":
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    with pytest.raises(OSError, match="No space left"):
+        with OutputPlan() as plan:
+            a = plan.add_file("-a", tmp_path / "a.png", IMAGE_EXTS)
+            b = plan.add_file("-b", tmp_path / "b.png", IMAGE_EXTS)
+            plan.check()
+            plan.stage(a).write_bytes(b"new a")
+            plan.stage(b).write_bytes(b"new b")
+            monkeypatch.setattr(os, "replace", flaky)
+            plan.commit()
+    assert (tmp_path / "a.png").is_symlink() and (tmp_path / "a.png").read_bytes() == b"kept"
+    assert (tmp_path / "b.png").read_bytes() == b"old b"

@@ -286,6 +286,9 @@ class OutputPlan:
 
     def _check_folder(self, o: _Output) -> None:
         p = o.path
+        if p.is_symlink() and not p.exists():  # it would be created at the link, after the work
+            raise FileNotFoundError(f"{o.option}: {p} is a symbolic link to {os.readlink(p)}, which does not "
+                                    "exist; create that folder or choose another")
         if p.exists() and not p.is_dir():
             raise NotADirectoryError(f"{o.option}: {p} exists and is not a folder")
         for what, i in self.inputs:
@@ -327,6 +330,11 @@ class OutputPlan:
                 raise ValueError(f"{o.option}: {o.path} is also the output of {seen[key].option}; "
                                  "give each output its own path")
             seen[key] = o
+        for f in (o for o in self.outputs if o.folder):  # a file among a frame folder's own names
+            for o in self.outputs:
+                if not o.folder and same_file(_abs(o.path).parent, f.path) and matches_patterns(o.path.name, f.patterns):
+                    raise ValueError(f"{o.option}: {o.path} is named like a frame of {f.option} "
+                                     f"({', '.join(f.patterns)}) in the same folder; choose another name")
         for o in self.outputs:
             if o.folder:  # a frame folder gets a staging folder of its own
                 o.staged = self._staging_for(o, o.anchor if o.create else _abs(o.path), own=True)
@@ -411,10 +419,13 @@ class OutputPlan:
             else:
                 moves += [(o.staged / n, o.path / n, o.staged) for n in o.names]
         backups: list[tuple[Path, Path]] = []
+        links: list[tuple[str, Path]] = []  # output paths that were symbolic links: (target, path)
         done: list[Path] = []
         try:
             for i, (src, dst, stage) in enumerate(moves):
-                if dst.exists() and not dst.is_symlink():
+                if dst.is_symlink():  # replaced by the new file; put back as it was on failure
+                    links.append((os.readlink(dst), dst))
+                elif dst.exists():
                     backup = stage / f".backup-{i}"
                     try:  # the old file, to put back if a later rename fails
                         os.link(dst, backup)
@@ -435,10 +446,15 @@ class OutputPlan:
                     os.rename(o.staged, o.path)
                 done.append(o.path)
         except BaseException:
-            restored = {dst for _, dst in backups}
+            restored = {dst for _, dst in backups} | {dst for _, dst in links}
             for backup, dst in backups:
                 with contextlib.suppress(OSError):
                     os.replace(backup, dst)
+            for target, dst in links:
+                if dst in done:
+                    with contextlib.suppress(OSError):
+                        dst.unlink()
+                        os.symlink(target, dst)
             for dst in done:
                 if dst not in restored and dst.is_file():
                     with contextlib.suppress(OSError):
