@@ -330,7 +330,7 @@ def run_stereo(args) -> int:
     from ibr.io.outputs import VIDEO_EXTS, OutputPlan
     from ibr.sequence.files import iter_views, load_sequence
     from ibr.sequence.metrics import frame_change, static_mask_from_motion, summarize_flicker
-    from ibr.sequence.stereo import sequence_stereo_params, stereo_sequence
+    from ibr.sequence.stereo import pool_depths, sequence_stereo_params, stereo_sequence
     from ibr.stereo.pair import pack_stereo
     from ibr.stereo.stereo_camera import max_interaxial_for_range
 
@@ -352,8 +352,7 @@ def run_stereo(args) -> int:
             if args.f is None:
                 e, f = sequence_stereo_params(depths, max_angle_deg=args.max_angle)
             else:
-                z = np.concatenate([d[::4, ::4].ravel() for d in depths])
-                z = z[np.isfinite(z)]
+                z = pool_depths(depths)
                 f = args.f
                 e = max_interaxial_for_range(*np.percentile(z, [1, 99]), f, max_angle_deg=args.max_angle)
         else:

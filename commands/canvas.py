@@ -8,6 +8,8 @@ _VIEW_EXTS = (".json",)
 
 
 def add_arguments(parser) -> None:
+    from commands._common import frame_rate
+
     parser.add_argument("scene", metavar="SCENE",
                         help="a view file (.json; its depth hides what is behind) or a panorama (equirect 2:1, "
                              "cubemap image, or a folder of px/nx/py/ny/pz/nz faces)")
@@ -34,7 +36,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--depth", metavar="RANGE.exr",
                         help="panoramas: equirect range map (distance along the ray) that hides the canvas")
     parser.add_argument("--frames", type=int, default=None, metavar="N", help="--video: at most N frames")
-    parser.add_argument("--fps", type=float, default=None, help="--video with a video output: frame rate "
+    parser.add_argument("--fps", type=frame_rate, default=None, help="--video with a video output: frame rate "
                         "(default: the input's)")
     parser.add_argument("--no-antialias", action="store_true", help="hard canvas edges")
     parser.add_argument("-o", "--output", required=True, metavar="OUT",

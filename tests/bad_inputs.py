@@ -418,6 +418,11 @@ _add("distort --c1 nan", U, "usage", r"argument --c1: expected a finite number",
      "-o", "{d}/o.png"))
 _add("distort --r-max 0", U, "usage", r"argument --r-max: expected a positive number", argv=("distort", "{d}/img.png", "--c1",
      "0.2", "--r-max", "0", "-o", "{d}/o.png"))
+_add("distort --r-max 1e200", C, "error", r"r_max: expected a number <= 1000", argv=("distort", "{d}/img.png", "--c1",
+     "0.2", "--r-max", "1e200", "-o", "{d}/o.png"))  # r_max^2 overflowed (traceback)
+_add("canvas --fps inf", U, "usage", r"argument --fps: expected a finite number", argv=(
+     "canvas", "{d}/a.json", "--image", "{d}/img.png", "--center", "0", "0", "4", "--normal", "0", "0", "-1", "--size", "1",
+     "1", "--fps", "inf", "-o", "{d}/o.png"))  # cv2.VideoWriter spun forever at fps = inf
 _add("distort --scale -1", U, "usage", r"argument --scale", argv=("distort", "{d}/img.png", "--c1", "0.2", "--scale", "-1",
      "-o", "{d}/o.png"))
 _add("distort --chromatic 0 1", U, "usage", r"argument --chromatic: expected a positive number", argv=("distort", "{d}/img.png",

@@ -86,7 +86,7 @@ def test_fit_radial_least_squares():
         fit_radial(r_u, r_d[:10])
 
 
-def test_bad_lens_rejected():
+def test_bad_lens_rejected(tmp_path, capsys):
     with pytest.raises(ValueError, match="not increasing"):
         RadialDistortion(-0.6, 0.0, 1.0)  # f'(1) = 1 - 1.8 < 0
     with pytest.raises(ValueError, match="method: expected one of"):
@@ -94,6 +94,15 @@ def test_bad_lens_rejected():
     assert np.isnan(LENSES[0].undistort(LENSES[0].rd_max * 1.01))
     with pytest.raises(TypeError, match="lens: expected a RadialDistortion or a sequence of three"):
         predistort(np.zeros((4, 4, 3), np.uint8), [LENSES[0]] * 2)
+    # r_max^2 overflowed (OverflowError traceback from `ibr distort --r-max 1e200`)
+    with pytest.raises(ValueError, match="r_max: expected a number <= 1000"):
+        RadialDistortion(0.1, 0.0, 1e200)
+    import cli
+    from samples import DATA_DIR
+
+    assert cli.main(["distort", str(DATA_DIR / "room_a_color.png"), "--c1", "0.1", "--r-max", "1e200",
+                     "-o", str(tmp_path / "x.png")]) == 1
+    assert "r_max: expected a number <= 1000" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
 
 
 def test_distortion_maps_geometry_and_center():

@@ -249,3 +249,32 @@ def test_ground_truth_sequences_are_inputs_never_outputs(tmp_path, capsys):
     assert "ground truth" in capsys.readouterr().err
     assert {p.name: p.read_bytes() for p in gt.iterdir()} == gt_before
     assert {p.name: p.read_bytes() for p in seq.iterdir()} == before
+
+
+def test_stereo_over_a_sequence_of_sparse_depth(tmp_path, capsys):
+    """Depth valid on every other row and column only (odd rows and columns): the pooled grid
+    (every 4th pixel of every 4th row) saw none of it. ``ibr stereo SEQ --f 4`` crashed
+    (IndexError in a percentile of nothing) and without --f it said no frame had depth."""
+    from ibr.io import save_view
+    from ibr.sequence.stereo import pool_depths
+
+    seq = tmp_path / "seq"
+    assert cli.main(["samples", "--sequence", "--size", "48x36", "--keys", "2", "--factor", "1",
+                     "--out", str(seq)]) == 0
+    sparse = tmp_path / "sparse"
+    sparse.mkdir()
+    names = []
+    for i, v in enumerate(load_sequence(seq / "room_walk.json").views):
+        view = load_view(v)
+        z = np.full(view.depth.shape, np.nan, np.float32)
+        z[1::2, 1::2] = view.depth[1::2, 1::2]
+        save_view(View(view.color, z, view.camera, f"p{i}"), sparse / f"p_{i:04d}.json")
+        names.append(f"p_{i:04d}.json")
+    (sparse / "s.json").write_text(json.dumps({"format": "ibr-sequence", "version": 1, "views": names}))
+    zs = [load_view(sparse / n).depth for n in names]
+    pooled = pool_depths(zs)
+    assert pooled.size > 0 and np.isfinite(pooled).all()
+    for extra in (["--f", "4"], ["--auto"]):
+        assert cli.main(["stereo", str(sparse / "s.json"), *extra, "-o", str(tmp_path / f"o{len(extra)}")]) == 0
+    with pytest.raises(ValueError, match="depths: no valid"):
+        pool_depths([np.full((4, 4), np.nan, np.float32)])

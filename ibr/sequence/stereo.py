@@ -17,7 +17,7 @@ from ..base.view import View
 from ..stereo.pair import StereoPair, check_stereo_supersample, stereo_pair
 from ..stereo.stereo_camera import DEFAULT_MAX_ANGLE_DEG, auto_stereo
 
-__all__ = ["sequence_stereo_params", "stereo_sequence"]
+__all__ = ["pool_depths", "sequence_stereo_params", "stereo_sequence"]
 
 
 def sequence_stereo_params(depths: Iterable, *, max_angle_deg: float = DEFAULT_MAX_ANGLE_DEG,
@@ -31,25 +31,11 @@ def sequence_stereo_params(depths: Iterable, *, max_angle_deg: float = DEFAULT_M
     max_angle_deg : float
         Parallax visual-angle limit (seed 000, eq. 12 with the limit as a parameter).
     stride : int
-        Every ``stride``-th pixel of every ``stride``-th row is pooled (memory stays small for
-        long sequences; the 1st/99th percentiles do not need every pixel).
+        Every ``stride``-th pixel of every ``stride``-th row is pooled (:func:`pool_depths`).
     mode : {"balanced", "seed"}
         As in :func:`ibr.stereo.auto_stereo`.
     """
-    if isinstance(stride, bool) or not isinstance(stride, (int, np.integer)) or stride < 1:
-        raise ValueError(f"stride: expected an integer >= 1, got {stride!r}")
-    pooled = []
-    for i, d in enumerate(depths):
-        d = np.asarray(d, np.float32)
-        if d.ndim != 2:
-            raise ValueError(f"depths[{i}]: expected an (H, W) depth map, got shape {d.shape}")
-        s = d[::stride, ::stride].ravel()
-        pooled.append(s[np.isfinite(s) & (s > 0)])
-    if not pooled:
-        raise ValueError("depths: expected at least one depth map, got none")
-    z = np.concatenate(pooled)
-    if z.size == 0:
-        raise ValueError("depths: no valid (finite, positive) depth in any frame")
+    z = pool_depths(depths, stride=stride)
     return auto_stereo(z, max_angle_deg=max_angle_deg, mode=mode)
 
 
@@ -60,10 +46,34 @@ def stereo_sequence(views: Iterable[View], *, e: float, f: float, source: str = 
     (``supersample``: with ``method="mesh"``, see there).
 
     ``views`` is consumed lazily (one view alive at a time). Disocclusions are filled per row
-    from the background side, as for single frames; the pair's ``left_holes``/``right_holes``
+    from the background side and smoothed across rows, as for single frames; the pair's ``left_holes``/``right_holes``
     report them.
     """
     check_stereo_supersample(supersample, method)  # at the first frame asked for, before any view is read
     for view in views:
         yield stereo_pair(view, e=e, f=f, source=source, method=method, mesh_options=mesh_options,
                           supersample=supersample)
+
+
+def pool_depths(depths: Iterable, *, stride: int = 4) -> np.ndarray:
+    """The valid (finite, positive) depths of a sequence, pooled over its frames: every
+    ``stride``-th pixel of every ``stride``-th row (memory stays small for long sequences; the
+    percentiles do not need every pixel), or, for a frame whose valid pixels that grid misses
+    (sparse depth, valid on every other row and column), every ``stride``²-th valid pixel. Raises
+    naming ``depths`` when no frame has a valid depth."""
+    if isinstance(stride, bool) or not isinstance(stride, (int, np.integer)) or stride < 1:
+        raise ValueError(f"stride: expected an integer >= 1, got {stride!r}")
+    pooled = []
+    for i, d in enumerate(depths):
+        d = np.asarray(d, np.float32)
+        if d.ndim != 2:
+            raise ValueError(f"depths[{i}]: expected an (H, W) depth map, got shape {d.shape}")
+        s = d[::stride, ::stride].ravel()
+        s = s[np.isfinite(s) & (s > 0)]
+        pooled.append(s if s.size else d[np.isfinite(d) & (d > 0)][::stride * stride])
+    if not pooled:
+        raise ValueError("depths: expected at least one depth map, got none")
+    z = np.concatenate(pooled)
+    if z.size == 0:
+        raise ValueError("depths: no valid (finite, positive) depth in any frame")
+    return z

@@ -53,6 +53,10 @@ __all__ = [
 INVERSE_METHODS = ("newton", "lut", "approx")
 
 
+#: Largest lens range r_max (normalized radius, tan of the half field angle: 89.94 deg).
+MAX_R = 1000.0
+
+
 @dataclass(frozen=True)
 class RadialDistortion:
     """Radial model ``r_d = r_u + c1 r_u^3 + c2 r_u^5`` valid for ``0 <= r_u <= r_max``.
@@ -68,7 +72,9 @@ class RadialDistortion:
     def __post_init__(self):
         object.__setattr__(self, "c1", check_finite_scalar("c1", self.c1))
         object.__setattr__(self, "c2", check_finite_scalar("c2", self.c2))
-        object.__setattr__(self, "r_max", check_positive("r_max", self.r_max))
+        # a normalized radius (tan of the half field angle): 1000 is 89.94 deg; r_max^2 overflowed at 1e200
+        object.__setattr__(self, "r_max", float(check_number("r_max", self.r_max, minimum=0, exclusive_minimum=True,
+                                                             maximum=MAX_R)))
         s = np.linspace(0, self.r_max**2, 4097)
         d = 1 + 3 * self.c1 * s + 5 * self.c2 * s**2
         # the quadratic in s = r^2 has its extremum at s* = -3 c1 / (10 c2)
