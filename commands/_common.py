@@ -122,6 +122,26 @@ class terminate_as_interrupt:
         return False
 
 
+def image_for(path, img):
+    """``img`` in a dtype the file format of ``path`` stores, so that any colour can be written to
+    any advertised extension: float [0, 1] becomes uint8 for .png / .jpg (clipped, rounded),
+    uint16 becomes uint8 for .jpg, uint8 / uint16 become float32 [0, 1] for .exr / .pfm (float64:
+    float32 there and for .tif); anything else is returned as is."""
+    import numpy as np
+
+    ext = Path(path).suffix.lower()
+    a = np.asarray(img)
+    if ext in (".png", ".jpg", ".jpeg") and a.dtype.kind == "f":
+        return np.clip(np.rint(np.nan_to_num(a) * 255.0), 0, 255).astype(np.uint8)
+    if ext in (".jpg", ".jpeg") and a.dtype == np.uint16:
+        return ((a.astype(np.uint32) + 128) // 257).astype(np.uint8)
+    if ext in (".exr", ".pfm", ".tif", ".tiff") and a.dtype == np.float64:
+        return a.astype(np.float32)
+    if ext in (".exr", ".pfm") and a.dtype.kind == "u":
+        return a.astype(np.float32) / np.float32(np.iinfo(a.dtype).max)
+    return a
+
+
 def note_first_run(*modules: str, warm: str = "frame") -> bool:
     """Say before a long first run that numba is compiling (once): when none of ``modules``
     (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet; then

@@ -72,16 +72,6 @@ def _strokes_doc(path):
     return doc
 
 
-def _to_output_dtype(img, path):
-    import numpy as np
-
-    if path.suffix.lower() in (".png", ".jpg", ".jpeg") and img.dtype.kind == "f":
-        return np.clip(np.rint(np.nan_to_num(img) * 255.0), 0, 255).astype(np.uint8)
-    if path.suffix.lower() in (".exr", ".pfm") and img.dtype.kind == "u":
-        return (img.astype(np.float32) / (255.0 if img.dtype == np.uint8 else 65535.0))
-    return img
-
-
 class _Target:
     """Where the canvas goes: a view (pinhole camera + depth) or a panorama (layout + range)."""
 
@@ -153,9 +143,10 @@ class _Target:
 
 
 def _write(path, img, plan, name=None):
+    from commands._common import image_for
     from ibr.io import write_image
 
-    write_image(plan.stage(path, name) if name else plan.stage(path), _to_output_dtype(img, path))
+    write_image(plan.stage(path, name) if name else plan.stage(path), image_for(path, img))
 
 
 def run(args) -> int:
@@ -255,7 +246,7 @@ def _run_video(args, plan, out, target, geo, video_file) -> int:
     import numpy as np
 
     import ibr.canvas as C
-    from commands._common import progress
+    from commands._common import image_for, progress
 
     src = C.VideoSource(args.video)
     try:
@@ -278,7 +269,7 @@ def _run_video(args, plan, out, target, geo, video_file) -> int:
             if video_file:
                 if img.ndim != 3 or img.shape[2] != 3:
                     raise ValueError("-o: a video file needs an RGB scene")
-                frame = _to_output_dtype(img, out.with_suffix(".png"))
+                frame = image_for(out.with_suffix(".png"), img)
                 if writer is None:
                     fourcc = cv2.VideoWriter_fourcc(*("MJPG" if out.suffix.lower() == ".avi" else "mp4v"))
                     fps = args.fps or src.fps or 25.0

@@ -38,16 +38,6 @@ def add_arguments(parser) -> None:
     add_stereo_arguments(parser)
 
 
-def display_image(arr, path):
-    """Color for writing to ``path``: float [0, 1] becomes uint8 for .png/.jpg (clipped)."""
-    import numpy as np
-
-    a = np.asarray(arr)
-    if a.dtype.kind == "f" and path.suffix.lower() in (".png", ".jpg", ".jpeg"):
-        return np.clip(np.rint(a * 255), 0, 255).astype(np.uint8)
-    return a
-
-
 def _suffixed(path, tag):
     return path.with_name(f"{path.stem}_{tag}{path.suffix}")
 
@@ -57,7 +47,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import info
+    from commands._common import image_for, info
     from ibr.io import load_view, write_image
     from ibr.io.outputs import OutputPlan
     from ibr.stereo.pair import check_stereo_supersample, no_valid_depth_message, pack_stereo, stereo_pair
@@ -106,7 +96,7 @@ def run(args) -> int:
              + ("" if rep.ok else "  WARNING: outside the comfort limits"))
         pair = stereo_pair(view, e=e, f=f, source=args.source, method=args.method, supersample=args.supersample)
         info(f"stereo: disocclusions filled: left {pair.left_holes.mean():.2%}, right {pair.right_holes.mean():.2%}")
-        left, right = display_image(pair.left, out), display_image(pair.right, out)
+        left, right = image_for(out, pair.left), image_for(out, pair.right)
         packed = pack_stereo(left, right, args.mode)
         for path, img in zip(images, packed if args.mode == "separate" else [packed]):
             write_image(plan.stage(path), img)

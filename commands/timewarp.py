@@ -70,7 +70,7 @@ def run(args) -> int:
     from dataclasses import replace
 
     from commands._common import info, progress
-    from commands.stereo import display_image
+    from commands._common import image_for
     from ibr.io import load_view, write_image
     from ibr.io.outputs import OutputPlan
     from ibr.stereo.timewarp import timewarp, timewarp_mode
@@ -102,7 +102,7 @@ def run(args) -> int:
         for i, c in progress(enumerate(cams), len(cams), "timewarp"):
             fr = timewarp(view, c, mode=args.mode)
             path = plan.stage(out, f"frame_{i:04d}.png")
-            write_image(path, display_image(fr.color, path))
+            write_image(path, image_for(path, fr.color))
             if fr.outside.any():
                 info(f"timewarp: frame {i}: {fr.outside.mean():.1%} beyond the guard band (edge replicated)")
         plan.commit()

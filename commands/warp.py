@@ -57,8 +57,8 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import info, note_first_run
-    from commands.interpolate import _to_float, _to_png
+    from commands._common import image_for, info, note_first_run
+    from commands.interpolate import _to_float
     from ibr.base.view import View
     from ibr.io import load_view, write_depth, write_image
     from ibr.io.outputs import IMAGE_EXTS, OutputPlan
@@ -93,10 +93,7 @@ def run(args) -> int:
             line += f", PSNR over covered pixels {covered_db:.2f} dB vs {Path(args.to).name}"
             if args.fill != "none":
                 line += f" (whole image: {psnr(result.color, target.color):.2f} dB)"
-        color = _to_float(result.color) if out.suffix.lower() in (".exr", ".pfm") else result.color
-        if out.suffix.lower() in (".png", ".jpg", ".jpeg"):
-            color = _to_png(color)
-        write_image(plan.stage(out), color)
+        write_image(plan.stage(out), image_for(out, result.color))
         if depth_out:
             write_depth(plan.stage(depth_out), result.depth)
         if holes_out:

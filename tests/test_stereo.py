@@ -585,3 +585,24 @@ def test_supersample_needs_the_mesh_method(tmp_path, capsys):
                      "-o", str(tmp_path / "s.png")]) == 1
     assert "supersample: 3 needs method='mesh'" in capsys.readouterr().err
     assert not (tmp_path / "s.png").exists()
+
+
+def test_cli_writes_every_advertised_extension(tmp_path):
+    """``ibr stereo VIEW -o s.exr`` (``.exr`` is in the help) rendered the pair, then failed: a
+    uint8 view cannot be stored in EXR as it is. Colours are converted to what the extension
+    stores (float [0, 1] for .exr, uint8 for .jpg of a 16-bit view)."""
+    import cli
+    from ibr.io import read_image, save_view
+    from samples import DATA_DIR
+
+    assert cli.main(["stereo", str(DATA_DIR / "room_a.json"), "--auto", "-o", str(tmp_path / "s.exr")]) == 0
+    png = tmp_path / "s.png"
+    assert cli.main(["stereo", str(DATA_DIR / "room_a.json"), "--auto", "-o", str(png)]) == 0
+    exr = read_image(tmp_path / "s.exr")
+    assert exr.dtype == np.float32 and np.abs(exr * 255 - read_image(png)).max() <= 0.5 + 1e-3
+    from ibr import load_view
+
+    v = load_view(DATA_DIR / "room_a.json")
+    save_view(View(v.color.astype(np.uint16) * 257, v.depth, v.camera, "v16"), tmp_path / "v16.json")
+    assert cli.main(["stereo", str(tmp_path / "v16.json"), "--auto", "-o", str(tmp_path / "s.jpg")]) == 0
+    assert read_image(tmp_path / "s.jpg").dtype == np.uint8
