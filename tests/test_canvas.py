@@ -334,3 +334,49 @@ def test_frame_schedule_is_the_pulldown_of_seed_001():
     np.testing.assert_array_equal(frame_schedule(5, 96, 24), [0, 0, 0, 0, 1])
     with pytest.raises(ValueError, match="display_fps"):
         frame_schedule(3, 0, 24)
+
+
+def test_review_findings_grey_targets_ray_alpha_rgba_order_and_float64():
+    """Found by a review, each against the pinhole RGB path as the reference: (1) a grey target
+    read a uint8 canvas's alpha 255x (an opaque grey 0.2 over 100 gave 0, a float target -50.6);
+    (2) the ray path multiplied alpha in twice (white at alpha 0.5 over black: 0.252, the
+    pinhole 0.502); (3) an RGBA target crashed the ray path; (4) over an image array canvases
+    were ordered by their centres only (a farther canvas whose centre is nearer painted over
+    the nearer one); (5) a View with float64 colour was refused."""
+    from ibr.base.view import View
+    from ibr.canvas import composite, composite_into, composite_rays_into, pick_pixel
+    from ibr.canvas.pick import camera_rays
+
+    cam = Camera(100.0, 100.0, 31.5, 23.5, 64, 48)
+    c = Canvas((0, 0, 10), (0, 0, -1), (2, 1), resolution=(20, 10), dtype=np.uint8)
+    c.clear((0.2, 0.2, 0.2, 1.0))
+    g, rgb, gf = np.full((48, 64), 100, np.uint8), np.full((48, 64, 3), 100, np.uint8), np.full((48, 64), 0.4, np.float32)
+    for img in (g, rgb, gf):
+        composite_into(img, cam, c)
+    assert g[23, 31] == rgb[23, 31, 0] == 51 and gf[23, 31] == pytest.approx(0.2, abs=1e-6)
+    vv, uu = np.mgrid[0:48, 0:64]
+    o, d, _ = camera_rays(cam, np.stack([uu.ravel(), vv.ravel()], -1).astype(float))
+    d = d.reshape(48, 64, 3)
+    half = Canvas((0, 0, 10), (0, 0, -1), (2, 1), resolution=(20, 10), dtype=np.uint8)
+    half.clear((1, 1, 1, 0.5))
+    for channels in (3, 4):
+        p = np.zeros((48, 64, channels), np.float32)
+        r = np.zeros((48, 64, channels), np.float32)
+        composite_into(p, cam, half)
+        composite_rays_into(r, o, d, half)
+        np.testing.assert_allclose(r[23, 31], p[23, 31], atol=1e-3)
+        assert p[23, 31, 0] == pytest.approx(128 / 255, abs=1e-3)
+    a = Canvas((0, 0, 5), (0, 0, -1), (1, 1), resolution=(8, 8), name="A")
+    a.clear((1, 0, 0, 1))  # red, z = 5 on the axis
+    n = np.array([-1.0, 0, -1.0]) / np.sqrt(2)
+    b = Canvas((2, 0, 4), n, (8, 2), resolution=(32, 8), name="B")
+    b.clear((0, 0, 1, 1))  # blue: its centre is nearer, but it is at z = 6 on the axis
+    assert pick_pixel(cam, 31.5, 23.5, [a, b]).canvas.name == "A"
+    black = np.zeros((48, 64, 3), np.uint8)
+    for out in (composite(black, [a, b], camera=cam), composite(View(black, None, cam), [a, b]).color):
+        assert out[23, 31].tolist() == [255, 0, 0]
+    r = np.zeros((48, 64, 3), np.float32)
+    composite_rays_into(r, o, d, [a, b])
+    assert r[23, 31].tolist() == [1.0, 0.0, 0.0]
+    v64 = composite(View(np.zeros((48, 64, 3), np.float64), None, cam), [half])
+    assert v64.color.dtype == np.float64 and v64.color[23, 31, 0] == pytest.approx(128 / 255, abs=1e-3)

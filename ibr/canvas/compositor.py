@@ -178,6 +178,10 @@ def composite_into(color, camera: Camera, canvases, *, depth=None, depth_tol: fl
         if write_depth:
             raise ValueError("depth: write_depth=True needs a depth array to write into")
         z = np.empty((1, 1), np.float32)
+    if len(items) > 1 and not write_depth:  # a depth buffer of its own (the caller's is not
+        # written): a nearer canvas hides a farther one per pixel, not only by centre distance
+        z = np.full(camera.shape, np.nan, np.float32) if not use_depth else np.array(z, np.float32, copy=True)
+        use_depth = write_depth = True
     maxval = _MAXVAL.get(out.dtype.name, 1.0)
     for canvas in _far_to_near(items, camera.position):
         box = projected_bbox(canvas, camera)
@@ -214,7 +218,7 @@ def _blend_one(out, z, use_depth, write_depth, canvas: Canvas, hinv: np.ndarray,
                                flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
     if samp.ndim == 2:
         samp = samp[..., None]
-    scale = 1.0 / _MAXVAL.get(tex.dtype.name, 1.0)
+    scale = 1.0 / canvas.max_value  # the texture's values are in the canvas's scale (gray: float32 of them)
     direct = samp.dtype == out.dtype and samp.shape[2] == out.shape[2]
     _k.blend_samples(out, z, use_depth, write_depth, samp, scale, v0, u0, np.ascontiguousarray(hinv[2]), lines,
                      tol, maxval, out.dtype.kind == "u", maxval, antialias, direct)
@@ -246,9 +250,14 @@ def composite(target, canvases, *, camera: Camera | None = None, depth=None, dep
         if camera is not None or depth is not None:
             raise ValueError("camera, depth: taken from the Rendering/View target; do not pass them")
         color = np.array(target.color, copy=True)
+        wide = color.dtype == np.float64  # a View may hold float64: drawn in float32, given back as float64
+        if wide:
+            color = color.astype(np.float32)
         z = None if target.depth is None else np.array(target.depth, dtype=np.float32, copy=True)
         composite_into(color, target.camera, canvases, depth=z, depth_tol=depth_tol, antialias=antialias,
                        write_depth=z is not None)
+        if wide:
+            color = color.astype(np.float64)
         if isinstance(target, Rendering):
             return replace(target, color=color, depth=z)
         return View(color, z, target.camera, target.name)
@@ -296,9 +305,8 @@ def _sample_premultiplied(tex: np.ndarray, scale: float, x: np.ndarray, y: np.nd
     alpha = np.zeros(len(x))
     for yy, xx, wgt in ((y0, x0, (1 - fx) * (1 - fy)), (y0, x1, fx * (1 - fy)),
                         (y1, x0, (1 - fx) * fy), (y1, x1, fx * fy)):
-        a = tex[yy, xx, nc].astype(np.float64) * (wgt * scale)
-        alpha += a
-        col += tex[yy, xx, :nc].astype(np.float64) * (a * scale)[:, None]
+        alpha += tex[yy, xx, nc].astype(np.float64) * (wgt * scale)
+        col += tex[yy, xx, :nc].astype(np.float64) * (wgt * scale)[:, None]  # premultiplied already
     return col, alpha
 
 
@@ -338,6 +346,9 @@ def composite_rays_into(color, origin, dirs, canvases, *, rng=None, depth_tol: f
             raise ValueError(f"rng: expected shape {out.shape[:2]}, got {rng.shape}")
     if write_range and (rng is None or rng.dtype != np.float32 or not rng.flags.writeable):
         raise ValueError("rng: write_range=True needs a writable float32 range array")
+    if len(items) > 1 and not write_range:  # a range buffer of its own: canvases hide each other per pixel
+        rng = np.full(out.shape[:2], np.nan, np.float32) if rng is None else np.array(rng, np.float32, copy=True)
+        write_range = True
     maxval = _MAXVAL.get(out.dtype.name, 1.0)
     for canvas in _far_to_near(items, o):
         t, x, y = _plane_coords(canvas, o, d)
@@ -364,6 +375,8 @@ def composite_rays_into(color, origin, dirs, canvases, *, rng=None, depth_tol: f
         tex = _texture(canvas, out.shape[2])
         col, alpha = _sample_premultiplied(tex, 1.0 / canvas.max_value, x[sel], y[sel])
         c = cov[sel]
+        if out.shape[2] == 4:  # an RGBA target: its alpha channel blends like a (premultiplied) colour
+            col = np.concatenate([col, alpha[:, None]], axis=1)
         alpha *= c
         dst = out[sel].astype(np.float64)
         val = col * (c * maxval)[:, None] + dst * (1.0 - alpha)[:, None]
