@@ -241,3 +241,37 @@ def test_every_offered_detector_finds_features(photos, detector):
     gray = cv2.cvtColor(np.ascontiguousarray(photos.images[0]), cv2.COLOR_RGB2GRAY)
     feats = detect([gray, np.full_like(gray, 128)], detector)
     assert len(feats[0].keypoints) >= 50 and len(feats[1].keypoints) == 0
+
+
+def test_review_findings_free_focals_alpha_masks_grey_and_no_usable_photo(sphere):
+    """Found by a review: (1) ``same_focal=False`` dropped a correct photo of another focal
+    length (OpenCV's first estimate gives every photo the median focal, and the check before the
+    bundle adjustment took the true pair for a false match); (2) a photo's alpha channel, "a 4th
+    channel = mask", limited the compositing but not the features; (3) (H, W, 1) grey photos
+    crashed the detector; (4) with ``focal_px`` and no usable photo an IndexError replaced the
+    documented error."""
+    a = cut_photos(sphere, [(0.0, 0.0), (80.0, 0.0)], width=320, height=240, hfov_deg=75.0)
+    b = cut_photos(sphere, [(40.0, 0.0)], width=320, height=240, hfov_deg=55.0)
+    imgs, cams = [a.images[0], b.images[0], a.images[1]], [a.cameras[0], b.cameras[0], a.cameras[1]]
+    r = stitch_photos(imgs, width=512, same_focal=False)
+    assert r.report.used == [0, 1, 2]
+    focals = [r.report.images[k].focal_px for k in range(3)]
+    np.testing.assert_allclose(focals, [c.fx for c in cams], rtol=0.03)  # 208.5 / 307.4 / 208.5
+    assert max(rotation_errors_deg(r.cameras, cams)) < 1.0
+    p = cut_photos(sphere, [(0.0, 0.0), (45.0, 0.0), (180.0, 0.0)], width=320, height=240, hfov_deg=75.0)
+    pa = p.images[0].copy()
+    pa[:, :140] = p.images[2][:, 90:230]  # a poster of another view, masked out by alpha
+    alpha = np.full(pa.shape[:2], 255, np.uint8)
+    alpha[:, :150] = 0
+    mask = (alpha > 0).astype(np.uint8)
+    by_mask = stitch_photos([pa, p.images[1], p.images[2]], width=512, masks=[mask, None, None])
+    opaque = np.full(pa.shape[:2], 255, np.uint8)
+    by_alpha = stitch_photos([np.dstack([pa, alpha]), np.dstack([p.images[1], opaque]), np.dstack([p.images[2], opaque])],
+                             width=512)
+    assert by_alpha.report.images[0].features == by_mask.report.images[0].features
+    assert by_alpha.report.used == by_mask.report.used
+    grey = [cv2.cvtColor(im, cv2.COLOR_RGB2GRAY)[..., None] for im in p.images[:2]]
+    assert stitch_photos(grey, width=256).report.used == [0, 1]
+    blank = np.zeros((240, 320, 3), np.uint8)
+    with pytest.raises(ValueError, match="no two of the 1 photos could be stitched"):
+        stitch_photos([blank], width=256, focal_px=200.0)

@@ -209,8 +209,12 @@ def estimate_rotations(features, pairs, data: dict, candidates, *, conf_thresh: 
         focals = [float(c.focal) for c in cams] if focal_px is None else [float(focal_px[i]) for i in idx]
         res = _residuals(data, idx, rots, focals, centres, conf_thresh, rejected)
         worst = max(res, key=res.get) if res else None
-        # the spanning-tree estimate carries a few pixels of drift: only gross errors here
-        if worst is not None and res[worst] > 4 * max_residual_px:
+        # the spanning-tree estimate carries a few pixels of drift: only gross errors here. With
+        # a focal length per photo to find (same_focal=False) OpenCV's estimate gives every photo
+        # the median focal, so true pairs of different focals look gross: the check after the
+        # bundle adjustment judges them (a 208/307/208 px set lost its middle photo here)
+        free_focals = focal_px is None and not same_focal
+        if worst is not None and res[worst] > 4 * max_residual_px and not free_focals:
             rejected[worst] = res[worst]
             _drop_pair(pairs, n, *worst)
             continue

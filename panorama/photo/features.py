@@ -48,9 +48,11 @@ def _gray_u8(img: np.ndarray) -> np.ndarray:
         img = np.nan_to_num(img.astype(np.float32)) * 255.0
     if img.dtype != np.uint8:
         img = np.clip(np.rint(img), 0, 255).astype(np.uint8)
+    if img.ndim == 3 and img.shape[2] < 3:  # (H, W, 1) grey, or grey + alpha: the grey channel
+        img = img[..., 0]
     if img.ndim == 3:
         img = cv2.cvtColor(np.ascontiguousarray(img[..., :3]), cv2.COLOR_RGB2GRAY)
-    return img
+    return np.ascontiguousarray(img)
 
 
 def registration_images(images, megapix: float) -> tuple[list[np.ndarray], list[float]]:

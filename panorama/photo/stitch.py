@@ -223,12 +223,16 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
 
     t0 = time.perf_counter()
     gray, scales = registration_images(images, registration_megapix)
+    # where features may lie: ``masks``, else a photo's 4th channel (alpha > 0), as for compositing
+    feature_masks = [(masks[k] if masks is not None else None) for k in range(n)]
+    feature_masks = [m if m is not None or not (img.ndim == 3 and img.shape[2] == 4) else img[..., 3]
+                     for m, img in zip(feature_masks, images)]
     reg_masks = None
-    if masks is not None:
+    if any(m is not None for m in feature_masks):
         import cv2
         reg_masks = [None if m is None else
                      cv2.resize(np.where(np.asarray(m) > 0, 255, 0).astype(np.uint8), g.shape[::-1],
-                                interpolation=cv2.INTER_NEAREST) for m, g in zip(masks, gray)]
+                                interpolation=cv2.INTER_NEAREST) for m, g in zip(feature_masks, gray)]
     feats = detect(gray, detector, reg_masks)
     secs["features"] = time.perf_counter() - t0
     if progress:
@@ -276,7 +280,7 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
         for k in candidates:
             report.images[k].drop("no_match", "no other photo to match" if n == 1 else
                                   "no photo to pair it with")
-    if est is None or (len(est.used) < 2 and reg_focal is None):
+    if est is None or len(est.used) == 0 or (len(est.used) < 2 and reg_focal is None):
         if est is not None:
             for k in est.used:
                 report.images[k].drop("no_match", "matches no other photo well enough")
