@@ -311,3 +311,29 @@ def test_cli_ssim_equals_scikit_image(motorcycle):
     psnr, ssim = _metrics(left, right)
     assert psnr == pytest.approx(peak_signal_noise_ratio(right, left, data_range=1.0), abs=1e-6)
     assert ssim == pytest.approx(structural_similarity(right, left, data_range=1.0, channel_axis=-1), abs=1e-6)
+
+
+def test_end_points_resolution_changes_and_the_cubic_border():
+    """Found by a review: (1) at t = 0 (t = 1) the blend composite is source a's (b's) own view
+    exactly: the other source, of weight 0, won the nearer-surface test with its silhouette
+    quads (clutter: 717 / 469 pixels up to 123 levels off); (2) ``fill="previous"`` over target
+    cameras of different sizes crashed (the previous frame was indexed with the new hole mask):
+    a previous frame of another size is not used; (3) bicubic sampling read 0 past the source's
+    border (a uniform 200 came out up to 243 along it)."""
+    from ibr.io import load_view
+    from samples import DATA_DIR
+
+    a, b = load_view(DATA_DIR / "clutter_a.json"), load_view(DATA_DIR / "clutter_b.json")
+    for t, ref in ((0.0, a), (1.0, b)):
+        for kw in ({}, {"interpolation": "cubic"}):
+            r = ibr.interpolate(a, b, t, fill="none", **kw)
+            assert not r.holes.any()
+            np.testing.assert_array_equal(r.color, ref.color)
+    big = a.camera
+    small = big.resized(big.width // 2, big.height // 2)
+    frames = ibr.interpolate(a, b, [big, small, big], fill="previous")
+    assert [f.color.shape[:2] for f in frames] == [big.shape, small.shape, big.shape]
+    assert all(f.filled[f.holes].all() for f in frames)
+    flat = View(np.full(a.color.shape, 200, np.uint8), a.depth, a.camera, "flat")
+    r = ibr.warp(flat, a.camera.resized(a.camera.width * 2, a.camera.height * 2), fill="none", interpolation="cubic")
+    assert np.abs(r.color[~r.holes].astype(int) - 200).max() <= 1

@@ -81,7 +81,7 @@ def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, quant0, quant2, is_int, m
                     for ch in range(nc):
                         _store(out, v, u, ch, xa * ca[v, u, ch] + xb * cb[v, u, ch], is_int, maxval)
                     depth[v, u] = xa * a + xb * b
-                elif (not blend) or a <= b:
+                elif (not blend) or a <= b or wb == 0.0:  # a source of weight 0 only fills holes
                     for ch in range(nc):
                         _store(out, v, u, ch, ca[v, u, ch], is_int, maxval)
                     depth[v, u] = a
@@ -203,7 +203,7 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
                         x = xa * _lerp(sa, p0, p1, p2, p3, pax, pay, ch) + xb * _lerp(sb, q0, q1, q2, q3, qax, qay, ch)
                         _store(out, v, u, ch, x, is_int, maxval)
                     depth[v, u] = xa * a + xb * b
-                elif (not blend) or a <= b:
+                elif (not blend) or a <= b or wb == 0.0:  # a source of weight 0 only fills holes
                     _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
                     depth[v, u] = a
                 else:
@@ -267,7 +267,7 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
                 # (front order, not ``blend``) the first; no arrays are rebound per pixel (numba
                 # counts references on each rebinding: a one-source warp, where every pixel comes
                 # here, ran 2x slower)
-                if has_a and (not has_b or not blend or a <= b):
+                if has_a and (not has_b or not blend or a <= b or wb == 0.0):
                     _copy3(orow, lar, u)
                     drow[u] = a
                 else:

@@ -270,22 +270,30 @@ def sample_maps(color_f32: np.ndarray, map_u: np.ndarray, map_v: np.ndarray, *, 
     map value 3.0 reads pixel column 3 exactly, 3.5 averages columns 3 and 4 bilinearly).
 
     ``interpolation`` is ``"linear"`` (bilinear, default) or ``"cubic"`` (bicubic: +0.5 to
-    +1.7 dB on the bundled pairs, about 5x the sampling time). Outside the image the constant
-    border returns 0. OpenCV quantizes the fractional position to 1/32 pixel (INTER_BITS = 5),
+    +1.7 dB on the bundled pairs, about 5x the sampling time). Outside the image (beyond half a
+    pixel past the border centres) the result is 0; the bicubic taps that reach past the border
+    of a position inside read the border pixel (with 0 there a uniform 200 came out up to 243
+    along the border). OpenCV quantizes the fractional position to 1/32 pixel (INTER_BITS = 5),
     exact at integer positions.
     """
     check_choice("interpolation", interpolation, INTERPOLATIONS)
     c = color_f32.shape[2]
     if c > 4:
         raise ValueError(f"color: at most 4 channels, got {c}")
+    cubic = interpolation == "cubic"
+    border = cv2.BORDER_REPLICATE if cubic else cv2.BORDER_CONSTANT
     if out is not None:
         dst = out[..., 0] if c == 1 else out
-        cv2.remap(color_f32, map_u, map_v, INTERPOLATIONS[interpolation], dst=dst, borderMode=cv2.BORDER_CONSTANT,
-                  borderValue=0)
-        return out
-    res = cv2.remap(color_f32, map_u, map_v, INTERPOLATIONS[interpolation], borderMode=cv2.BORDER_CONSTANT,
-                    borderValue=0)
-    return res[..., None] if res.ndim == 2 else res
+        cv2.remap(color_f32, map_u, map_v, INTERPOLATIONS[interpolation], dst=dst, borderMode=border, borderValue=0)
+        res = out
+    else:
+        res = cv2.remap(color_f32, map_u, map_v, INTERPOLATIONS[interpolation], borderMode=border, borderValue=0)
+        res = res[..., None] if res.ndim == 2 else res
+    if cubic:  # replicated taps serve positions inside; outside (uncovered: _FAR) stays 0
+        h, w = color_f32.shape[:2]
+        outside = (map_u < -0.5) | (map_u > w - 0.5) | (map_v < -0.5) | (map_v > h - 0.5)
+        np.copyto(res, np.float32(0), where=outside[..., None])
+    return res
 
 
 def source_color(mesh, color) -> np.ndarray:

@@ -341,9 +341,12 @@ def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
     # background-rim samples beside a hole: covered (the hole mask stays exact), but their colour
     # (foreground mixed in) is replaced by the fill's background estimate; their depth stays
     replace = comp.replace if comp.replace is not None and fill != "none" and comp.replace.any() else None
+    if replace is not None and (holes | replace).all():  # no pixel left to fill from: rims stay
+        replace = None
     rim_depth = depth[replace] if replace is not None else None
     if holes.any() or replace is not None:
-        if fill == "previous" and previous is not None:  # seed step 7; only hole pixels change
+        # seed step 7 (only hole pixels change); a previous frame of another size cannot serve
+        if fill == "previous" and previous is not None and previous.depth.shape == holes.shape:
             color[holes] = previous.color.reshape(color.shape)[holes]
             depth[holes] = previous.depth[holes]
             filled = holes.copy()
