@@ -8,7 +8,7 @@ _VIEW_EXTS = (".json",)
 
 
 def add_arguments(parser) -> None:
-    from commands._common import frame_rate
+    from commands._common import finite_float, frame_count, frame_rate, image_side, positive_float
 
     parser.add_argument("scene", metavar="SCENE",
                         help="a view file (.json; its depth hides what is behind) or a panorama (equirect 2:1, "
@@ -20,33 +20,28 @@ def add_arguments(parser) -> None:
                       help='strokes JSON: {"strokes": [{"points": [[x, y], ...], "width": 4, "color": "#ff0000"}], '
                            '"space": "canvas" (canvas pixels, default) or "screen" (pixels of SCENE), '
                            '"background": "#ffffff00"}')
-    parser.add_argument("--center", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"),
+    parser.add_argument("--center", type=finite_float, nargs=3, required=True, metavar=("X", "Y", "Z"),
                         help="canvas centre in scene units (world frame: x right, y down, z forward)")
-    parser.add_argument("--normal", type=float, nargs=3, required=True, metavar=("NX", "NY", "NZ"),
+    parser.add_argument("--normal", type=finite_float, nargs=3, required=True, metavar=("NX", "NY", "NZ"),
                         help="normal of the visible side (points toward the viewer)")
-    parser.add_argument("--up", type=float, nargs=3, default=(0.0, -1.0, 0.0), metavar=("UX", "UY", "UZ"),
+    parser.add_argument("--up", type=finite_float, nargs=3, default=(0.0, -1.0, 0.0), metavar=("UX", "UY", "UZ"),
                         help="up direction on the canvas (default 0 -1 0: world up is -y)")
-    parser.add_argument("--size", type=float, nargs=2, required=True, metavar=("W", "H"),
+    parser.add_argument("--size", type=positive_float, nargs=2, required=True, metavar=("W", "H"),
                         help="canvas width and height in scene units")
-    parser.add_argument("--resolution", type=int, nargs=2, default=None, metavar=("PW", "PH"),
+    parser.add_argument("--resolution", type=image_side, nargs=2, default=None, metavar=("PW", "PH"),
                         help="canvas buffer in pixels (default: the image's or video's size; 512 on the long "
                              "side for strokes)")
     parser.add_argument("--power-of-two", action="store_true",
                         help="resample the content into a square power-of-two texture (seed 004)")
     parser.add_argument("--depth", metavar="RANGE.exr",
                         help="panoramas: equirect range map (distance along the ray) that hides the canvas")
-    parser.add_argument("--frames", type=int, default=None, metavar="N", help="--video: at most N frames")
+    parser.add_argument("--frames", type=frame_count, default=None, metavar="N", help="--video: at most N frames")
     parser.add_argument("--fps", type=frame_rate, default=None, help="--video with a video output: frame rate "
                         "(default: the input's)")
     parser.add_argument("--no-antialias", action="store_true", help="hard canvas edges")
     parser.add_argument("-o", "--output", required=True, metavar="OUT",
                         help="image (.png/.jpg/.tif/.exr; a folder for a face-folder panorama); with --video a "
                              "folder of frame_0000.png ... or a video file (.mp4/.avi/.mov/.m4v)")
-
-
-def _positive(name: str, value) -> None:
-    if value is not None and not value > 0:
-        raise ValueError(f"{name}: expected a positive number, got {value}")
 
 
 def _strokes_doc(path):
@@ -159,9 +154,6 @@ def run(args) -> int:
     from ibr.io import read_image
     from ibr.io.outputs import IMAGE_EXTS, VIDEO_EXTS, OutputPlan
 
-    _positive("--fps", args.fps)
-    if args.frames is not None and args.frames < 1:
-        raise ValueError(f"--frames: expected a positive number of frames, got {args.frames}")
     if args.video is None and (args.frames is not None or args.fps is not None):
         raise ValueError("--frames, --fps: only with --video")
     geo = dict(center=args.center, normal=args.normal, size=args.size, up=args.up)

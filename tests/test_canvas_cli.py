@@ -122,7 +122,7 @@ def test_bad_input(scene, capsys):
         (["--image", str(tmp / "poster.png"), "--center", "0", "0", "3", "--normal", "0", "0", "0",
           "--size", "1", "1"], "normal: expected a finite non-zero"),
         (["--image", str(tmp / "poster.png"), "--center", "0", "0", "3", "--normal", "0", "0", "-1",
-          "--size", "0", "1"], "size"),
+          "--size", "0", "1"], "argument --size: expected a positive number"),  # a usage error (exit 2)
         (["--image", str(tmp / "poster.png"), "--center", "0", "0", "3", "--normal", "0", "0", "-1",
           "--up", "0", "0", "1", "--size", "1", "1"], "up: must not be parallel"),
         (["--video", str(tmp / "junk.mp4"), *GEO], "cannot open"),
@@ -133,7 +133,7 @@ def test_bad_input(scene, capsys):
     ]
     for extra, match in cases:
         out = tmp / ("bad.png" if match == "-o: with --video" or "--video" not in extra else "bad_frames")
-        assert main(["canvas", str(tmp / "v.json"), *extra, "-o", str(out)]) == 1
+        assert main(["canvas", str(tmp / "v.json"), *extra, "-o", str(out)]) == (2 if match.startswith("argument") else 1)
         err = capsys.readouterr().err
         assert match in err, (extra, err)
         assert not out.exists()
