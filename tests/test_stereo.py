@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from ibr import synth
 from ibr.render._fill_kernels import fill_rows_background, fill_rows_background_reference
 from ibr.stereo._pair_kernels import scanline_warp, scanline_warp_reference
-from ibr.base.camera import Camera, gl_frustum_from_projection
+from ibr.base.camera import Camera, gl_frustum_from_projection, look_at
 from ibr.base.depth import window_from_z
 from ibr.stereo.stereo_camera import StereoCamera, auto_stereo, comfort, interaxial_for_parallax, max_interaxial, max_interaxial_for_range, parallax_angle_deg, parallax_px, parallax_scene
 from ibr.render.fill import fill_background_rows, fill_horizontal_parallax
@@ -606,3 +606,30 @@ def test_cli_writes_every_advertised_extension(tmp_path):
     save_view(View(v.color.astype(np.uint16) * 257, v.depth, v.camera, "v16"), tmp_path / "v16.json")
     assert cli.main(["stereo", str(tmp_path / "v16.json"), "--auto", "-o", str(tmp_path / "s.jpg")]) == 0
     assert read_image(tmp_path / "s.jpg").dtype == np.uint8
+
+
+def test_review_findings_far_cameras_flat_scenes_grey_lens_and_16_bit_dubois():
+    """Found by a review: (1) method 2 refused eye cameras 1e4 units from the world origin (the
+    pose products' round-off, ~1e-16 |p|, against a fixed 1e-12); (2) ``auto_stereo`` of a
+    nearly flat depth (2 .. 2.000001) gave e = 234 269 and the pair failed on a 7e6 px shift:
+    capped at 10x the seed's e; (3) ``predistort`` dropped the axis of (H, W, 1) images;
+    (4) the 16-bit Dubois anaglyph was up to 7 codes off near black (a ramp 0..1999)."""
+    from ibr.stereo.lens import RadialDistortion, predistort
+    from ibr.stereo.stereo_camera import MAX_E_OVER_SEED, max_interaxial
+
+    base = _plane_view(slope=0.002)
+    far = base.camera.with_pose(look_at([1.2e4, -3e3, 8e3], [1.2e4 + 1.0, -3e3, 8e3 + 2.0]))
+    view = View(base.color, base.depth, far, "far")
+    for method in ("pixel", "splat"):
+        pair = stereo_pair(view, e=0.05, f=4.0, method=method)
+        assert pair.left.shape == base.color.shape and not np.isnan(pair.left).any()
+    flat = np.broadcast_to(np.linspace(2.0, 2.000001, 64), (48, 64))
+    e, f = auto_stereo(flat)
+    assert e == pytest.approx(MAX_E_OVER_SEED * max_interaxial(f))
+    stereo_pair(View(base.color, flat.astype(np.float32), base.camera), e=e, f=f)
+    for dt in (np.uint8, np.uint16, np.float32):
+        assert predistort(np.ones((12, 16, 1), dt), RadialDistortion(0.2)).shape == (12, 16, 1)
+    ramp = np.repeat(np.arange(2000, dtype=np.uint16)[None, :, None], 3, axis=2)
+    lut = dubois_anaglyph(ramp, ramp)
+    exact = dubois_anaglyph(ramp.astype(np.float64) / 65535, ramp.astype(np.float64) / 65535) * 65535
+    assert np.abs(lut.astype(np.float64) - exact).max() <= 0.5 + 1e-6

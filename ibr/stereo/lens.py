@@ -282,7 +282,8 @@ def _distortion_maps(width: int, height: int, lens: RadialDistortion, *, center_
 
 
 def _remap(img: np.ndarray, mx, my) -> np.ndarray:
-    return cv2.remap(img, mx, my, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    out = cv2.remap(img, mx, my, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    return out[..., None] if img.ndim == 3 and out.ndim == 2 else out  # OpenCV drops a single channel axis
 
 
 def predistort(image, lens, *, center_px=None, scale_px: float | None = None,

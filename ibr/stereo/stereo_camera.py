@@ -317,6 +317,11 @@ def comfort(z_near: float, z_far: float, *, e: float, f: float,
     return ComfortReport(bool(worst <= lim + 1e-12 and nearest_ok), worst, lim, bool(nearest_ok), a_near, a_far)
 
 
+#: ``auto_stereo`` ("balanced") takes at most this many times the seed's interaxial ``2 f tan(beta/2)``:
+#: the eyes' principal-point shift ``fx e / (2 f)`` stays under ``10 fx tan(beta/2)`` (0.28 fx at 3.2 deg).
+MAX_E_OVER_SEED = 10.0
+
+
 def auto_stereo(depth, *, max_angle_deg: float = DEFAULT_MAX_ANGLE_DEG,
                 percentiles: tuple[float, float] = (1.0, 99.0),
                 mode: str = "balanced") -> tuple[float, float]:
@@ -353,4 +358,7 @@ def auto_stereo(depth, *, max_angle_deg: float = DEFAULT_MAX_ANGLE_DEG,
     e = max_interaxial_for_range(z_near, z_far, f, max_angle_deg=max_angle_deg)
     if not np.isfinite(e):  # flat depth: any e keeps zero parallax; fall back to the seed's rule
         e = max_interaxial(f, max_angle_deg=max_angle_deg)
+    # a nearly flat scene allows an unbounded e (2..2.000001 gave e = 234 269 and a principal-point
+    # shift of 7e6 px): at most MAX_E_OVER_SEED times the seed's e, safe for any depth
+    e = min(e, MAX_E_OVER_SEED * max_interaxial(f, max_angle_deg=max_angle_deg))
     return float(e), float(f)
