@@ -20,6 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import math
+
 import numpy as np
 
 from .validate import (MAX_FOCAL_PX, MAX_PRINCIPAL_PX, check_array, check_camera_dict, check_finite_scalar,
@@ -49,10 +51,12 @@ def _check_pose(name: str, pose) -> np.ndarray:
     m = check_array(name, pose, shape=(4, 4), dtype_kind="fiu").astype(np.float64)
     if not np.all(np.isfinite(m)):
         raise ValueError(f"{name}: pose has non-finite entries")
-    if not np.allclose(m[3], [0, 0, 0, 1], atol=1e-9):
+    # rtol=0: np.allclose's default relative tolerance (1e-5) let a last row of 1.000009 and a
+    # rotation scaled by 1.000005 through
+    if not np.allclose(m[3], [0, 0, 0, 1], rtol=0, atol=1e-9):
         raise ValueError(f"{name}: last row must be [0, 0, 0, 1], got {m[3].tolist()}")
     r = m[:3, :3]
-    if not np.allclose(r @ r.T, np.eye(3), atol=1e-6) or np.linalg.det(r) < 0:
+    if not np.allclose(r @ r.T, np.eye(3), rtol=0, atol=1e-6) or np.linalg.det(r) < 0:
         raise ValueError(f"{name}: rotation block must be a proper rotation (orthonormal, det +1)")
     return m
 
@@ -60,8 +64,9 @@ def _check_pose(name: str, pose) -> np.ndarray:
 def _check_side(name: str, value) -> int:
     """An image side in pixels: an integer >= 1 (an integral float is taken), or ValueError naming ``name``."""
     if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating))
-            or not np.isfinite(value) or int(value) != value or int(value) < 1):
-        raise ValueError(f"{name}: expected a positive integer, got {value!r}")
+            or not (isinstance(value, (int, np.integer)) or math.isfinite(value))  # ints: np.isfinite overflows
+            or int(value) != value or int(value) < 1):
+        raise ValueError(f"{name}: expected a positive integer, got {value!r:.40}")
     return int(value)
 
 
@@ -344,11 +349,16 @@ def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
     eye = check_array("eye", eye, shape=(3,), dtype_kind="fiu").astype(float)
     target = check_array("target", target, shape=(3,), dtype_kind="fiu").astype(float)
     up = check_array("up", up, shape=(3,), dtype_kind="fiu").astype(float)
+    for name, v in (("eye", eye), ("target", target), ("up", up)):
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"{name}: expected finite coordinates, got {v.tolist()}")
     z = target - eye
     if np.linalg.norm(z) == 0:
         raise ValueError("target: must differ from eye")
+    if np.linalg.norm(up) == 0:
+        raise ValueError("up: must not be the zero vector")
     z /= np.linalg.norm(z)
-    x = np.cross(z, up)  # x = y_cam × z with y_cam = -up (image y points down)
+    x = np.cross(z, up / np.linalg.norm(up))  # x = y_cam × z with y_cam = -up (image y points down)
     if np.linalg.norm(x) < 1e-12:
         raise ValueError("up: must not be parallel to the viewing direction")
     x /= np.linalg.norm(x)

@@ -79,6 +79,16 @@ def valid_mask(z) -> np.ndarray:
         return np.isfinite(z) & (z > 0)
 
 
+def _depth32(z) -> np.ndarray:
+    """float32 depth (or range) with NaN wherever it is not a finite positive float32: the cast
+    turns 1e39 into inf and 1e-46 into 0, which would pass for depth."""
+    with np.errstate(over="ignore"):
+        out = np.asarray(z, dtype=np.float64).astype(np.float32)
+    with np.errstate(invalid="ignore"):
+        out[~(np.isfinite(out) & (out > 0))] = np.nan
+    return out
+
+
 def sanitize_depth(z, *, near: float | None = None, far: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Planar depth as float32 with every invalid value set to NaN, plus the validity mask.
 
@@ -96,8 +106,8 @@ def sanitize_depth(z, *, near: float | None = None, far: float | None = None) ->
             valid &= z64 >= check_positive("near", near)
         if far is not None:
             valid &= z64 <= check_positive("far", far, allow_inf=True)
-    out = np.where(valid, z64, np.nan).astype(np.float32)
-    return out, valid
+    out = _depth32(np.where(valid, z64, np.nan))
+    return out, valid & np.isfinite(out)  # values the float32 cast overflowed (1e39) or flushed (1e-46)
 
 
 def _ray_norm(camera, shape) -> np.ndarray:
@@ -116,14 +126,14 @@ def range_from_z(z, camera) -> np.ndarray:
     """
     z = _float("z", z)
     z = np.where(valid_mask(z), z, np.nan)
-    return (z * _ray_norm(camera, z.shape)).astype(np.float32)
+    return _depth32(z * _ray_norm(camera, z.shape))
 
 
 def z_from_range(r, camera) -> np.ndarray:
     """Planar z from range along the ray; inverse of :func:`range_from_z`. Invalid -> NaN."""
     r = _float("range", r)
     r = np.where(valid_mask(r), r, np.nan)
-    return (r / _ray_norm(camera, r.shape)).astype(np.float32)
+    return _depth32(r / _ray_norm(camera, r.shape))
 
 
 def z_from_disparity(d, *, baseline: float, focal_px: float, doffs: float = 0.0) -> np.ndarray:
@@ -140,7 +150,7 @@ def z_from_disparity(d, *, baseline: float, focal_px: float, doffs: float = 0.0)
     den = d + off
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(np.isfinite(den) & (den > 0), b * f / den, np.nan)
-    return z.astype(np.float32)
+    return _depth32(z)
 
 
 def disparity_from_z(z, *, baseline: float, focal_px: float, doffs: float = 0.0) -> np.ndarray:
@@ -183,7 +193,7 @@ def z_from_window(w, *, near: float, far: float) -> np.ndarray:
             ok &= w < 1
         else:
             z = n * f / (f - w * (f - n))
-    return np.where(ok, z, np.nan).astype(np.float32)
+    return _depth32(np.where(ok, z, np.nan))
 
 
 def reversed_from_z(z, *, near: float, far: float) -> np.ndarray:
@@ -204,7 +214,7 @@ def z_from_reversed(w_rev, *, near: float, far: float) -> np.ndarray:
     if np.isinf(f):
         with np.errstate(divide="ignore", invalid="ignore"):
             ok = np.isfinite(w_rev) & (w_rev > 0) & (w_rev <= 1)
-            return np.where(ok, n / w_rev, np.nan).astype(np.float32)
+            return _depth32(np.where(ok, n / w_rev, np.nan))
     return z_from_window(1.0 - w_rev, near=n, far=f)
 
 

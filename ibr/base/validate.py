@@ -110,9 +110,15 @@ def check_image(name: str, value, *, channels: Iterable[int] | None = None) -> n
 
 
 def check_finite_scalar(name: str, value) -> float:
-    """Return ``value`` as a finite float or raise naming ``name``."""
+    """Return ``value`` as a finite float or raise naming ``name``. A bool or a string is no
+    number (``float(True)`` and ``float("0.5")`` would pass); an integer too large for a float is
+    not finite."""
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        raise TypeError(f"{name}: expected a real number, got {value!r}")
     try:
         out = float(value)
+    except OverflowError:
+        raise ValueError(f"{name}: expected a finite number, got an integer of {len(str(value))} digits") from None
     except (TypeError, ValueError):
         raise TypeError(f"{name}: expected a real number, got {value!r}") from None
     if not np.isfinite(out):
@@ -227,13 +233,20 @@ def check_number(where: str, value, *, integer: bool = False, minimum: float | N
     ``where`` and give the received value.
     """
     if allow_inf and (isinstance(value, str) and value.lower() in ("inf", "+inf", "infinity")
-                      or (isinstance(value, float) and value == math.inf)):
+                      or (isinstance(value, (float, np.floating)) and value == math.inf)):
         value = math.inf
     elif isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         kind = "an integer" if integer else "a number"
         raise TypeError(f"{where}: expected {kind}, got {value!r} ({type(value).__name__})")
-    elif not math.isfinite(value):
-        raise ValueError(f"{where}: expected a finite number, got {value!r}")
+    else:
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # an int too large for a float (a 401-digit width in a JSON file)
+            finite = False
+        if not finite:
+            shown = (f"an integer of {len(str(abs(value)))} digits" if isinstance(value, (int, np.integer))
+                     else repr(value))
+            raise ValueError(f"{where}: expected a finite number, got {shown}")
     if integer:
         if value != math.floor(value):
             raise ValueError(f"{where}: expected an integer, got {value!r}")

@@ -52,6 +52,8 @@ class View:
             )
         if self.depth is not None:
             depth = check_image("depth", self.depth, channels=(1,))
+            if depth.dtype.kind == "b":  # True would pass for a depth of 1
+                raise TypeError(f"depth: expected a float or integer depth map, got dtype {depth.dtype}")
             depth = depth.reshape(depth.shape[:2])
             if depth.shape != color.shape[:2]:
                 raise ValueError(
