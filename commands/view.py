@@ -248,8 +248,8 @@ def run(args) -> int:
             eyes, (pano, layout) = None, read_panorama(args.pano, layout=args.layout)
         if args.tour is not None:
             kept = []
-            kw = dict(pitch_deg=args.pitch, fov_deg=args.fov, width=args.width, height=args.height, layout=layout,
-                      start_yaw_deg=args.yaw)
+            kw = dict(pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov, width=args.width,
+                      height=args.height, layout=layout, start_yaw_deg=args.yaw)
             if eyes is None:
                 views = tour_views(pano, args.tour, **kw)
             else:

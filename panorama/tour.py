@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 import math
 import re
-import shutil
 from pathlib import Path
 
 from ibr.base.validate import check_keys, nearest_name
@@ -108,9 +107,12 @@ def write_tour_site(folder, tour_path, *, face_size: int | None = None, force: b
     for every scene into ``folder`` (new or empty unless ``force``); return the page's path.
     Every scene is read and converted before anything is written."""
     from .files import read_panorama
-    from .viewer import WEB_DIR, _faces, check_site_folder
+    from .viewer import MAX_FACE_SIZE, _faces, check_site_folder, copy_page
     from ibr.io import write_image
 
+    if face_size is not None and face_size > MAX_FACE_SIZE:  # as write_site without tiles
+        raise ValueError(f"face_size: {face_size} px faces exceed what phones and many GPUs show "
+                         f"({MAX_FACE_SIZE} px per cube face); choose --face-size <= {MAX_FACE_SIZE}")
     tour = load_tour(tour_path)
     folder = check_site_folder(folder, force=force)
     faces = {}
@@ -126,6 +128,4 @@ def write_tour_site(folder, tour_path, *, face_size: int | None = None, force: b
                        "fov": s["fov"], "hotspots": s["hotspots"]}
     (folder / "viewer.json").write_text(json.dumps({"stereo": False, "tour": {"first": tour["first"],
                                                                             "scenes": scenes}}, indent=1) + "\n")
-    page = folder / "index.html"
-    shutil.copyfile(WEB_DIR / "index.html", page)
-    return page
+    return copy_page(folder)

@@ -107,12 +107,13 @@ def to_uint8(img: np.ndarray) -> np.ndarray:
 
 
 def tour_views(pano, n: int, *, pitch_deg: float = 0.0, fov_deg: float = 90.0, width: int = 640,
-               height: int = 360, layout: str | None = None, start_yaw_deg: float = 0.0):
-    """Yield ``n`` perspective views at yaw = start + 360 k / n (k = 0..n-1)."""
+               height: int = 360, layout: str | None = None, start_yaw_deg: float = 0.0, roll_deg: float = 0.0):
+    """Yield ``n`` perspective views at yaw = start + 360 k / n (k = 0..n-1), each at ``pitch_deg``
+    and ``roll_deg``."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n: expected a positive integer number of frames, got {n!r}")
     for k in range(n):
-        yield perspective(pano, yaw_deg=start_yaw_deg + 360.0 * k / n, pitch_deg=pitch_deg,
+        yield perspective(pano, yaw_deg=start_yaw_deg + 360.0 * k / n, pitch_deg=pitch_deg, roll_deg=roll_deg,
                           fov_deg=fov_deg, width=width, height=height, layout=layout)
 
 
@@ -147,8 +148,7 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
                          f"choose --face-size <= {largest}")
     folder = check_site_folder(folder, force=force)
     if tiles and face_size is None:  # the panorama's own resolution, a power of two, <= 8192
-        w = pano.shape[1] if isinstance(pano, np.ndarray) and pano.shape[1] == 2 * pano.shape[0] else None
-        face_size = MAX_FACE_SIZE if w is None else _pow2_face_size(w, 512, MAX_TILED_FACE_SIZE)
+        face_size = _pow2_face_size(_equirect_width(pano, layout), 512, MAX_TILED_FACE_SIZE)
     faces_per_eye = [_faces(eye, layout, face_size) for eye in eyes]  # all converted before writing
     config = {"stereo": stereo is not None}
     if depth is not None:
@@ -168,7 +168,13 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
         for name, face in zip(_FACES, faces):
             write_image(folder / f"{name}{suffix}.png", face)
     (folder / "viewer.json").write_text(json.dumps(config) + "\n")
-    page = folder / "index.html"
+    return copy_page(folder)
+
+
+def copy_page(folder) -> Path:
+    """Copy the viewer page into a site ``folder``; return its path. (The page also asks for
+    ``canvas.js``, which only ``ibr view PANO --serve`` adds: its canvas UI needs that server.)"""
+    page = Path(folder) / "index.html"
     shutil.copyfile(WEB_DIR / "index.html", page)
     return page
 
@@ -224,7 +230,23 @@ def _faces(pano, layout, face_size):
     else:
         from .convert import detect_layout
         faces = unpack_faces(pano, layout or detect_layout(pano))
+        s = faces[0].shape[0]
+        if face_size is None:  # as for an equirect: a power of two (WebGL1 mipmaps), >= the faces', <= 2048
+            face_size = _pow2_face_size(_equirect_width(pano, layout), 8, 2048)
+        if s != face_size:  # (face_size was ignored here: 600-px faces stayed 600, 4100-px ones passed the limit)
+            interp = cv2.INTER_AREA if face_size < s else cv2.INTER_LINEAR
+            faces = [cv2.resize(np.ascontiguousarray(f), (face_size, face_size), interpolation=interp) for f in faces]
     return [to_uint8(np.ascontiguousarray(f)) for f in faces]
+
+
+def _equirect_width(pano, layout) -> int:
+    """The width of an equirect ``pano``, or of the equirect matching a cubemap's faces (pi S)."""
+    if layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
+                                and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
+        return int(pano.shape[1])
+    from .convert import detect_layout
+    s = unpack_faces(pano, layout or detect_layout(pano))[0].shape[0]
+    return int(np.floor(np.pi * s))
 
 
 #: Site files beyond SITE_FILES: a tour scene's faces (``panorama.tour``), scene-<id>-px.png .., and tiles

@@ -244,3 +244,31 @@ def test_a_missing_tile_is_named_in_the_page(tmp_path):
         dt.close()
         server.shutdown()
         server.server_close()
+
+
+def test_cubemap_sites_take_face_size_and_tours_take_roll(tmp_path):
+    """Found by a review: a cubemap input ignored ``face_size`` (600-px faces stayed 600, not a
+    power of two for WebGL1 mipmaps; 4100-px faces passed the 4096 limit; ``--tiles`` failed
+    unless the faces were 512 * 2^k); the tour site had no face-size limit; ``--roll`` was
+    dropped by tours."""
+    import json
+
+    from panorama.tour import write_tour_site
+    from panorama.viewer import tour_views
+    from samples import DATA_DIR
+
+    faces = [np.full((600, 600, 3), 40 * k, np.uint8) for k in range(6)]
+    write_site(tmp_path / "a", faces, layout="list", face_size=64)
+    assert read_image(tmp_path / "a" / "px.png").shape == (64, 64, 3)
+    write_site(tmp_path / "b", faces, layout="list")  # the default: a power of two >= the faces'
+    assert read_image(tmp_path / "b" / "px.png").shape == (1024, 1024, 3)
+    write_site(tmp_path / "c", faces, layout="list", tiles=True)
+    assert read_image(tmp_path / "c" / "px.png").shape == (512, 512, 3)
+    tour = tmp_path / "tour.json"
+    tour.write_text(json.dumps({"scenes": [{"id": "a", "panorama": str(DATA_DIR / "rig" / "capture_pano_color.png")}]}))
+    with pytest.raises(ValueError, match="face_size: 4200 px faces exceed"):
+        write_tour_site(tmp_path / "t", tour, face_size=4200)
+    eq = np.random.default_rng(0).integers(0, 255, (64, 128, 3)).astype(np.uint8)
+    rolled = next(tour_views(eq, 4, width=32, height=24, roll_deg=30.0))
+    assert np.array_equal(rolled, P.perspective(eq, yaw_deg=0.0, pitch_deg=0.0, roll_deg=30.0, fov_deg=90.0, width=32, height=24))
+    assert not np.array_equal(rolled, next(tour_views(eq, 4, width=32, height=24)))
