@@ -142,6 +142,15 @@ def image_for(path, img):
     return a
 
 
+def face_file_patterns() -> tuple[str, ...]:
+    """The file names of a folder of cube faces (px.png .. nz.exr, every image extension), for an
+    output plan's frame folder: exactly these, not a user's px.txt or pz.backup.png."""
+    from ibr.io.outputs import IMAGE_EXTS
+    from panorama.directions import FACE_FILE_NAMES
+
+    return tuple(f"{n}{ext}" for n in FACE_FILE_NAMES for ext in IMAGE_EXTS)
+
+
 def note_first_run(*modules: str, warm: str = "frame") -> bool:
     """Say before a long first run that numba is compiling (once): when none of ``modules``
     (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet; then

@@ -44,6 +44,7 @@ def run(args) -> int:
     import panorama
     from ibr.io import write_image
     from ibr.io.outputs import IMAGE_EXTS, OutputPlan
+    from commands._common import face_file_patterns
     from panorama.directions import FACE_FILE_NAMES
     from panorama.files import FACE_EXTS, read_panorama, write_cubemap
 
@@ -62,7 +63,7 @@ def run(args) -> int:
         if files_out:
             if args.depth and ext.lower() not in float_exts:
                 raise ValueError(f"--ext: depth faces are float; use one of {', '.join(float_exts)}, got {ext}")
-            target = plan.add_folder("-o", out, tuple(f"{n}.*" for n in FACE_FILE_NAMES))
+            target = plan.add_folder("-o", out, face_file_patterns())
         else:
             if args.depth and out.suffix.lower() not in float_exts:
                 raise ValueError(f"-o: depth is float; use one of {', '.join(float_exts)}, got {out.name}")

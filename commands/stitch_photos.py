@@ -93,7 +93,7 @@ def run(args) -> int:
     from commands.interpolate import _to_float
     from ibr.io import read_image, write_image
     from ibr.io.outputs import IMAGE_EXTS, JSON_EXTS, OutputPlan
-    from panorama.directions import FACE_FILE_NAMES
+    from commands._common import face_file_patterns
     from panorama.files import write_cubemap
     from panorama.viewer import to_uint8
 
@@ -102,7 +102,7 @@ def run(args) -> int:
         for k, p in enumerate(args.images):
             plan.add_input(f"IMG {k}", p)
         target = plan.add_file("-o", out, IMAGE_EXTS)
-        cube = plan.add_folder("--cube", args.cube, tuple(f"{n}.*" for n in FACE_FILE_NAMES))
+        cube = plan.add_folder("--cube", args.cube, face_file_patterns())
         cov = plan.add_file("--coverage", args.coverage, (".png", ".tif", ".tiff"))
         rep = plan.add_file("--report", args.report, JSON_EXTS)
         plan.check()  # every output checked before any work

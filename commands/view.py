@@ -110,7 +110,7 @@ def _show_pair(left, right, how: str):
 
 def _serve(args, pano, layout, depth=None) -> int:
     from ibr.io.outputs import OutputPlan
-    from panorama.viewer import SITE_FILES, check_site_folder, serve, site_url, write_site
+    from panorama.viewer import SITE_EXTRA_PATTERNS, SITE_FILES, check_site_folder, serve, site_url, write_site
 
     temporary = args.site is None
     with terminate_as_interrupt():
@@ -144,7 +144,7 @@ def _serve(args, pano, layout, depth=None) -> int:
 
                         for sid, sc in load_tour(tour)["scenes"].items():
                             plan.add_input(f"scene {sid!r} panorama", sc["panorama"])
-                    site = plan.add_folder("--site", folder, SITE_FILES + ("scene-*-*.png", "tile-*.png"))
+                    site = plan.add_folder("--site", folder, SITE_FILES + SITE_EXTRA_PATTERNS)
                     plan.check()
                     write(plan.stage(site))
                     plan.commit()

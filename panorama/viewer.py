@@ -249,6 +249,9 @@ def _equirect_width(pano, layout) -> int:
     return int(np.floor(np.pi * s))
 
 
+#: File-name patterns (``#``: digits) of the site files beyond SITE_FILES, for an output plan:
+#: a tour scene's faces and the tiles, not a user's scene-my-holiday.png or tile-notes.png.
+SITE_EXTRA_PATTERNS = (tuple(f"scene-*-{n}.png" for n in _FACES) + tuple(f"tile-#-{n}-#-#.png" for n in _FACES))
 #: Site files beyond SITE_FILES: a tour scene's faces (``panorama.tour``), scene-<id>-px.png .., and tiles
 _EXTRA_SITE_FILE = re.compile(r"^scene-[A-Za-z0-9][A-Za-z0-9_-]{0,63}-(px|nx|py|ny|pz|nz)\.png$"
                         r"|^tile-[0-9]{1,2}-(px|nx|py|ny|pz|nz)-[0-9]{1,3}-[0-9]{1,3}\.png$")  # and tiles

@@ -522,3 +522,28 @@ def test_outputs_clashing_with_a_frame_folder_or_behind_a_dangling_link(tmp_path
         with OutputPlan() as plan:
             plan.add_folder("--out", tmp_path / "dl", ("frame_#.png",))
             plan.check()
+
+
+def test_face_folders_and_viewer_sites_leave_look_alike_user_files_alone(tmp_path):
+    """``px.*`` took a user's px.txt and pz.backup.png (ibr cubemap -o folder, ibr stitch-photos
+    --cube); the site's ``tile-*.png`` and ``scene-*-*.png`` took tile-notes.png and
+    scene-my-holiday.png (ibr view --site --force). Only the command's own names are removed."""
+    from samples import DATA_DIR
+
+    pano = DATA_DIR / "rig" / "capture_pano_color.png"
+    faces = tmp_path / "faces"
+    faces.mkdir()
+    users = ["px.txt", "pz.backup.png", "nx_notes.png"]
+    for n in users + ["py.jpg"]:  # py.jpg: an earlier run's face in another format
+        (faces / n).write_bytes(b"user")
+    assert cli.main(["cubemap", str(pano), "-o", str(faces)]) == 0
+    names = sorted(p.name for p in faces.iterdir())
+    assert names == sorted(users + [f"{n}.png" for n in ("px", "nx", "py", "ny", "pz", "nz")]), names
+    site = tmp_path / "site"
+    site.mkdir()
+    keep = ["tile-notes.png", "scene-my-holiday.png", "notes.txt"]
+    for n in keep + ["tile-1-px-0-0.png"]:
+        (site / n).write_bytes(b"user")
+    assert cli.main(["view", str(pano), "--site", str(site), "--force"]) == 0
+    left = {p.name for p in site.iterdir()}
+    assert set(keep) <= left and "tile-1-px-0-0.png" not in left
