@@ -78,7 +78,7 @@ def _export(args) -> int:
 
 def run(args) -> int:
     from ibr.io.importers import blender_script_path, import_views, read_frames, write_views
-    from ibr.io.importers.common import ImportReport
+    from ibr.io.importers.common import ImportReport, check_sequence_name
     from ibr.io.outputs import OutputPlan
 
     if args.format == "blender":
@@ -105,6 +105,8 @@ def run(args) -> int:
         for f in frames:
             plan.add_input("SRC", f.color)
             plan.add_input("SRC", f.depth)
+        if len(frames) > 1:
+            check_sequence_name(args.name or args.format, [f.name for f in frames])  # before any work
         folder = plan.add_folder("--out", args.out, _written_names(frames, args.name or args.format))
         plan.check()
         write_views(frames, plan.stage(folder), report, sequence_name=args.name or args.format,

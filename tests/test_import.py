@@ -362,3 +362,18 @@ def test_matrix_entries_and_manifest_views_are_checked(tmp_path):
         with pytest.raises(ValueError, match="'views' must be a non-empty list of view file names"):
             export_nerf([tmp_path / "seq.json"], tmp_path / "out.json")
     assert not (tmp_path / "out.json").exists()
+
+
+def test_the_manifest_name_is_a_plain_name_and_no_frame_s(tmp_path, capsys):
+    """``ibr import ... --name ../../transforms`` wrote the manifest over the input transforms.json;
+    ``--name r_0`` (a frame's name) replaced that frame's view file; without --name a frame
+    called like the format (``nerf``) was lost the same way. Refused before any work."""
+    src = tmp_path / "src"
+    shutil.copytree(RGB, src)
+    before = (src / "transforms.json").read_bytes()
+    names = [Path(f.color).stem.removesuffix("_color") for f in read_frames("nerf", src / "transforms.json")]
+    for bad in ("../../transforms", str(src / "transforms"), names[0], ".."):
+        out = tmp_path / "out"
+        assert cli.main(["import", "nerf", str(src / "transforms.json"), "--out", str(out), "--name", bad]) == 1
+        assert "--name: " in capsys.readouterr().err
+        assert not out.exists() and (src / "transforms.json").read_bytes() == before

@@ -96,17 +96,32 @@ def _load_frame(f: Frame) -> View:
     return View(color, depth, f.camera, f.name)
 
 
+def check_sequence_name(name, frame_names) -> None:
+    """``name`` of an import's sequence manifest (``<name>.json`` in the output folder): a plain
+    file name (``../../transforms`` wrote over the input), and no frame's name (``r_0`` replaced
+    that frame's view file). ``None`` writes no manifest."""
+    if name is None:
+        return
+    if (not isinstance(name, str) or not name or name in (".", "..") or "/" in name or "\\" in name
+            or Path(name).name != name):
+        raise ValueError(f"--name: expected a plain file name for the sequence manifest, got {name!r}")
+    if name in frame_names:
+        raise ValueError(f"--name: {name!r}.json would replace the view file of the frame {name!r}; choose another name")
+
+
 def write_views(frames: list[Frame], folder: Path, report: ImportReport, *, sequence_name: str | None = None,
                 progress=None) -> ImportReport:
     """Load every frame and write ``<name>.json`` (+ PNG colour, EXR depth) into ``folder``; with
     more than one frame and ``sequence_name``, also ``<sequence_name>.json``, a sequence manifest
     in the frames' order."""
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     names = [f.name for f in frames]
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})[0]
         raise ValueError(f"frames: two frames would be written as {dup!r}.json")
+    if len(frames) > 1:
+        check_sequence_name(sequence_name, names)
+    folder.mkdir(parents=True, exist_ok=True)
     for k, f in enumerate(frames):
         view = _load_frame(f)
         path = folder / f"{f.name}.json"
