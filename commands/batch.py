@@ -36,7 +36,7 @@ def run(args) -> int:
     from commands._common import info
     from commands._sequence import Progress
     from ibr.sequence.batch import run_batch
-    from ibr.sequence.jobs import load_jobs
+    from ibr.sequence.jobs import check_batch_files, load_jobs
 
     jobs_path = Path(args.jobs)
     jobs = load_jobs(jobs_path)
@@ -52,6 +52,7 @@ def run(args) -> int:
         raise IsADirectoryError(f"--report: {report_path} is a folder, expected a .json file name")
     if not report_path.parent.is_dir():
         raise FileNotFoundError(f"--report: the folder {report_path.parent} does not exist")
+    check_batch_files(jobs, jobs_path, records, report_path)  # no record or report over a file of the batch
     if args.scheduler:
         try:
             import distributed  # noqa: F401

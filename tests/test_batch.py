@@ -9,6 +9,7 @@ temporary file, and give the same pixels as an undisturbed run.
 from __future__ import annotations
 
 import json
+import re
 import multiprocessing
 import os
 import shutil
@@ -244,3 +245,21 @@ def test_dask_cluster_killed_worker_exactly_once_and_same_pixels(tmp_path, views
         assert again.counts == {"done": 0, "skipped": 4, "failed": 1}
         assert _commits(tmp_path, again.run_id) == []
     shutil.rmtree(tmp_path / "out")
+
+
+def test_report_and_records_never_replace_the_batch_s_files(tmp_path, views, capsys):
+    """``ibr batch jobs.json --report jobs.json`` replaced the job file with the report;
+    ``--records views`` with a job whose id is a view's name wrote its record over that view.
+    Both are refused before any job runs, as a records path that is a file."""
+    path = _make_batch(tmp_path, views)
+    doc = json.loads(path.read_text())
+    doc["jobs"] = doc["jobs"][:1]
+    doc["jobs"][0]["id"] = views[0].name  # its record would be views/<name>.json: the job's input
+    path.write_text(json.dumps(doc))
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    for extra, match in ((["--report", str(path)], "--report: .* is the batch file"),
+                         (["--records", str(tmp_path / "views")], "--records: .* is an input of job"),
+                         (["--records", str(path)], "--records: .* is a file")):
+        assert cli.main(["batch", str(path), "--workers", "1", *extra]) == 1
+        assert re.search(match, capsys.readouterr().err)
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before

@@ -282,6 +282,31 @@ def _check_not_inputs(job: Job, finals, inputs) -> None:
                              f"({os.path.relpath(hit, job.cwd)}); refusing to overwrite it")
 
 
+
+def check_batch_files(jobs, jobs_path, records, report) -> None:
+    """Refuse (ValueError, before any job runs) a batch ``report`` file or a job record
+    (``records/<id>.json``) that would replace the batch file itself or an input or output of a
+    job (``--report jobs.json`` replaced the job file; ``--records .`` with a job ``room_a``
+    wrote a record over the view file room_a.json)."""
+    from ..io.outputs import same_file
+
+    files = {}  # path -> what it is
+    files[Path(jobs_path)] = "the batch file"
+    for job in jobs:
+        for f in _input_files(job):
+            files.setdefault(f, f"an input of job {job.id}")
+        for o in job.outputs:
+            files.setdefault(Path(job.cwd) / o, f"an output of job {job.id}")
+    records = Path(records)
+    if records.exists() and not records.is_dir():
+        raise NotADirectoryError(f"--records: {records} is a file, expected a folder for the job records")
+    written = [("--report", Path(report))] + [("--records", _record_path(records, job)) for job in jobs]
+    for option, path in written:
+        for f, what in files.items():
+            if same_file(path, f):
+                raise ValueError(f"{option}: {path} is {what}; choose another "
+                                 f"{'report file' if option == '--report' else 'records folder'}")
+
 # --------------------------------------------------------------------------- records
 def _record_path(records: Path, job: Job) -> Path:
     return records / f"{job.id}.json"
