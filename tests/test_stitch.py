@@ -526,3 +526,12 @@ def test_small_review_findings_of_the_ods_helpers(cube_views):
     assert u[0] == pytest.approx(2057.93, abs=0.01)
     faces = pack_ods(ods_from_views(cube_views, 2), "cube")[0]
     assert all(f.shape[:2] == (1, 1) for f in faces.values())
+
+
+def test_equirect_widths_past_the_image_ceiling_are_refused():
+    """``ibr stitch --width 32768`` (inside the argparse range) allocated several 32768 x 16384
+    float arrays and was killed at 24 GB; the cameras refuse widths past the pixel ceiling."""
+    for make in (equirect_camera, ods_cameras):
+        with pytest.raises(ValueError, match="width: 32768x16384 = 536870912 pixels exceeds the ceiling"):
+            make(32768)
+    assert equirect_camera(16384).shape == (8192, 16384)

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ibr.base.camera import Camera
-from ibr.base.validate import check_finite_scalar
+from ibr.base.validate import check_finite_scalar, check_image_size
 from ibr.base.ray_camera import SphericalCamera
 
 from ..directions import WORLD_FROM_FACE
@@ -38,18 +38,25 @@ def _translation(center) -> np.ndarray:
     return m
 
 
-def equirect_camera(width: int, *, center=(0.0, 0.0, 0.0)) -> SphericalCamera:
-    """Mono equirect camera of ``width x width/2`` pixels at ``center`` (world frame)."""
+def _check_width(width) -> int:
+    """An equirect width: even, >= 2, and within the image ceilings for float32 RGB (a stitch
+    holds several such arrays: 32768 wide exhausted 24 GB)."""
     if isinstance(width, bool) or not isinstance(width, (int, np.integer)) or width < 2 or width % 2:
         raise ValueError(f"width: expected an even integer >= 2, got {width!r}")
+    check_image_size("width", int(width), int(width) // 2, channels=3, itemsize=4)
+    return int(width)
+
+
+def equirect_camera(width: int, *, center=(0.0, 0.0, 0.0)) -> SphericalCamera:
+    """Mono equirect camera of ``width x width/2`` pixels at ``center`` (world frame)."""
+    width = _check_width(width)
     return SphericalCamera(int(width), int(width) // 2, "mono", world_from_rig=_translation(center))
 
 
 def ods_cameras(width: int, *, ipd: float = 0.064, fade_start_deg: float = 60.0, fade_end_deg: float = 80.0,
                 center=(0.0, 0.0, 0.0)) -> tuple[SphericalCamera, SphericalCamera]:
     """(left, right) omnidirectional-stereo eye cameras (see :mod:`ibr.base.ray_camera`)."""
-    if isinstance(width, bool) or not isinstance(width, (int, np.integer)) or width < 2 or width % 2:
-        raise ValueError(f"width: expected an even integer >= 2, got {width!r}")
+    width = _check_width(width)
     pose = _translation(center)
     return tuple(SphericalCamera(int(width), int(width) // 2, eye, ipd, fade_start_deg, fade_end_deg, pose)
                  for eye in ("left", "right"))
