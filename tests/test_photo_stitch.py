@@ -275,3 +275,13 @@ def test_review_findings_free_focals_alpha_masks_grey_and_no_usable_photo(sphere
     blank = np.zeros((240, 320, 3), np.uint8)
     with pytest.raises(ValueError, match="no two of the 1 photos could be stitched"):
         stitch_photos([blank], width=256, focal_px=200.0)
+
+
+def test_fill_outside_the_output_range_is_refused_before_the_work(sphere):
+    """``ibr stitch-photos ... --fill 300`` on 8-bit photos ended in an OverflowError traceback
+    after the registration; the library refuses it first, naming ``fill``."""
+    p = cut_photos(sphere, [(0.0, 0.0), (45.0, 0.0)], width=160, height=120, hfov_deg=75.0)
+    for bad in (300, -1, float("nan"), (1, 2)):
+        with pytest.raises(ValueError, match="fill: expected"):
+            stitch_photos(p.images, width=256, fill=bad)
+    assert stitch_photos(p.images, width=256, fill=(255, 0, 255)).report.used == [0, 1]

@@ -284,6 +284,17 @@ def check_photo_index(name: str, value, n: int) -> None:
         raise ValueError(f"{name}: expected a photo index 0..{n - 1}, got {value!r}")
 
 
+def _check_fill(fill, dtype: np.dtype, shape) -> None:
+    """``fill``: a finite value (or one per channel) the output dtype holds (``--fill 300`` for
+    uint8 photos was an OverflowError after the work)."""
+    f = np.asarray(fill, dtype=np.float64) if not isinstance(fill, (bool, str)) else np.array(np.nan)
+    channels = shape[2] if len(shape) == 3 else 1
+    if f.ndim > 1 or (f.ndim == 1 and f.size not in (1, channels)) or not np.all(np.isfinite(f)):
+        raise ValueError(f"fill: expected a finite value or one per channel ({channels}), got {fill!r}")
+    if dtype.kind == "u" and (np.any(f < 0) or np.any(f > np.iinfo(dtype).max)):
+        raise ValueError(f"fill: expected values in [0, {np.iinfo(dtype).max}] for {dtype} photos, got {fill!r}")
+
+
 def compose_equirect(images, cameras, width: int, *, masks=None, exposure: str = "gain",
                      exposure_reference: int | None = None, seam: str = "gc_color",
                      bands: int | None = None, seam_megapix: float = 0.1, fill=0,
@@ -342,6 +353,7 @@ def compose_equirect(images, cameras, width: int, *, masks=None, exposure: str =
     out_dtype = np.dtype(np.asarray(images[0]).dtype)
     if out_dtype.kind == "f":
         out_dtype = np.dtype(np.float32)
+    _check_fill(fill, out_dtype, np.asarray(images[0]).shape)
     floats, user_masks = [], []
     for k, (img, cam) in enumerate(zip(images, cameras)):
         if not isinstance(cam, Camera):

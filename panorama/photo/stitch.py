@@ -22,7 +22,7 @@ import numpy as np
 from ibr.base.camera import Camera
 from ibr.base.validate import check_choice, check_image
 
-from .compose import EXPOSURES, SEAMS, check_photo_index, compose_equirect
+from .compose import EXPOSURES, SEAMS, _check_fill, check_photo_index, compose_equirect
 from .estimate import estimate_rotations, yaw_pitch_roll
 from .features import (DETECTORS, KEYPOINT_BIAS, detect, duplicates, match, pair_data, registration_images,
                        rotation_misfit)
@@ -215,6 +215,8 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
                               or width < 4 or width % 2):
         raise ValueError(f"width: expected an even integer >= 4, got {width!r}")
     images, names, focal_px = _check_inputs(images, names, masks, focal_px)
+    dtype = np.dtype(images[0].dtype)
+    _check_fill(fill, np.dtype(np.float32) if dtype.kind == "f" else dtype, images[0].shape)  # before the work
     n = len(images)
     for arg, value in (("reference", reference), ("exposure_reference", exposure_reference)):
         check_photo_index(arg, value, n)
