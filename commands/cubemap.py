@@ -44,7 +44,7 @@ def run(args) -> int:
     import panorama
     from ibr.io import write_image
     from ibr.io.outputs import IMAGE_EXTS, OutputPlan
-    from commands._common import face_file_patterns
+    from commands._common import face_file_patterns, image_for
     from panorama.directions import FACE_FILE_NAMES
     from panorama.files import FACE_EXTS, read_panorama, write_cubemap
 
@@ -81,7 +81,8 @@ def run(args) -> int:
             faces = panorama.equirect_to_cubemap(pano, size, layout="list", depth=args.depth,
                                                  interpolation=args.interpolation)
             staged = plan.stage(target)
-            write_cubemap(staged, faces, layout=layout, ext=ext)
+            as_written = Path(f"face{ext}") if files_out else out  # the extension the faces are stored in
+            write_cubemap(staged, [image_for(as_written, f) for f in faces], layout=layout, ext=ext)
             plan.commit()
             written = [out / f"{n}{ext}" for n in FACE_FILE_NAMES] if files_out else [out]
             info(f"cubemap: {w}x{h} equirect -> {layout} faces of {size}px: "
@@ -97,7 +98,7 @@ def run(args) -> int:
                 raise ValueError(f"--width: expected an even number >= 2 (height = width / 2), got {width}")
             eq = panorama.cubemap_to_equirect(faces, width, width // 2, layout="list", depth=args.depth,
                                               interpolation=args.interpolation)
-            write_image(plan.stage(target), eq)
+            write_image(plan.stage(target), image_for(out, eq))
             plan.commit()
             info(f"cubemap: {in_layout} faces of {s}px -> {width}x{width // 2} equirect: {out}")
     return 0

@@ -130,14 +130,10 @@ def _stitch_frame(args, views, panorama, tick):
 def _write(plan, out, dep, holes_out, packed, depth, holes) -> None:
     import numpy as np
 
-    from commands.interpolate import _to_png
+    from commands._common import image_for
     from ibr.io import write_depth, write_image
 
-    if out.suffix.lower() in (".png", ".jpg", ".jpeg"):
-        packed = _to_png(packed)
-    elif packed.dtype == np.uint8 and out.suffix.lower() in (".exr", ".pfm"):
-        packed = packed.astype(np.float32) / 255
-    write_image(out, packed)
+    write_image(out, image_for(out, packed))
     if dep:
         write_depth(dep, depth.astype(np.float32))
     if holes_out:
@@ -205,7 +201,9 @@ def run(args) -> int:
             plan.add_input("--panorama COLOR", args.panorama[0])
             plan.add_input("--panorama RANGE", args.panorama[1])
         out = plan.add_file("-o", args.output, IMAGE_EXTS)
-        dep = None if depth_arg == "none" else plan.add_file("--depth-out", depth_arg, DEPTH_EXTS)
+        # float range: a 16-bit PNG would need a scale (it failed after the work)
+        dep = None if depth_arg == "none" else plan.add_file("--depth-out", depth_arg,
+                                                              tuple(e for e in DEPTH_EXTS if e != ".png"))
         holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
         plan.check()  # every output checked before any work
         note_first_run("ibr.mesh._segment_kernels", "ibr.render._ray_kernels", warm="stitch")

@@ -93,7 +93,7 @@ def run(args) -> int:
     from commands.interpolate import _to_float
     from ibr.io import read_image, write_image
     from ibr.io.outputs import IMAGE_EXTS, JSON_EXTS, OutputPlan
-    from commands._common import face_file_patterns
+    from commands._common import face_file_patterns, image_for
     from panorama.files import write_cubemap
     from panorama.viewer import to_uint8
 
@@ -132,11 +132,11 @@ def run(args) -> int:
             pano = to_uint8(pano)
         elif out.suffix.lower() == ".exr" and pano.dtype.kind in "ui":  # EXR stores floats: [0, 1] units
             pano = _to_float(pano)
-        write_image(plan.stage(target), pano)
+        write_image(plan.stage(target), image_for(out, pano))
         if cube is not None:
             size = args.face_size or int(np.ceil(pano.shape[1] / np.pi))
             faces = panorama.equirect_to_cubemap(pano, size, layout="list")
-            write_cubemap(plan.stage(cube), faces, layout="files", ext=out.suffix.lower())
+            write_cubemap(plan.stage(cube), [image_for(out, f) for f in faces], layout="files", ext=out.suffix.lower())
         if cov is not None:
             write_image(plan.stage(cov), np.where(result.coverage, 255, 0).astype(np.uint8))
         if rep is not None:

@@ -194,6 +194,7 @@ def _read_site_depth(args, pano, layout):
 
 def run(args) -> int:
     import panorama
+    from commands._common import image_for
     from ibr.io import write_image
     from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
     from panorama.files import read_panorama
@@ -273,7 +274,7 @@ def run(args) -> int:
                               to_uint8(panorama.perspective(eyes[1], **kw)), args.stereo_out)
         if out.suffix.lower() in (".jpg", ".jpeg") or (out.suffix.lower() == ".png" and view.dtype.kind == "f"):
             view = to_uint8(view)
-        write_image(plan.stage(image), view)
+        write_image(plan.stage(image), image_for(image, view))
         plan.commit()
     info(f"view: yaw {args.yaw:g} pitch {args.pitch:g} roll {args.roll:g} fov {args.fov:g} -> {out}")
     return 0

@@ -160,3 +160,24 @@ def test_viewer_site_is_served_on_loopback_only(tmp_path):
         server.server_close()
     with pytest.raises(FileNotFoundError, match="has no index.html"):
         serve(tmp_path / "nowhere")
+
+
+def test_every_advertised_extension_is_written(tmp_path, capsys):
+    """``ibr cubemap PANO -o c.exr`` (and faces --ext .exr, ``ibr view -o v.exr``) of an 8-bit
+    panorama failed after the work ("array: a .exr file stores float32 ..."); ``ibr stitch
+    --depth-out d.png`` failed after the work on a missing scale. Colours are converted to what
+    the extension stores; a PNG depth output is refused before any work."""
+    from ibr.io import read_image
+    from samples import DATA_DIR
+
+    pano = DATA_DIR / "rig" / "capture_pano_color.png"
+    assert main(["cubemap", str(pano), "-o", str(tmp_path / "c.exr")]) == 0
+    assert main(["cubemap", str(pano), "-o", str(tmp_path / "faces"), "--ext", ".exr"]) == 0
+    assert main(["view", str(pano), "-o", str(tmp_path / "v.exr")]) == 0
+    for p in (tmp_path / "c.exr", tmp_path / "faces" / "px.exr", tmp_path / "v.exr"):
+        img = read_image(p)
+        assert img.dtype == np.float32 and 0.0 <= img.min() and img.max() <= 1.0
+    rig = sorted(str(p) for p in (DATA_DIR / "rig").glob("rig_*.json"))
+    assert main(["stitch", *rig, "-o", str(tmp_path / "p.png"), "--width", "64",
+                     "--depth-out", str(tmp_path / "d.png")]) == 1
+    assert "--depth-out: " in capsys.readouterr().err and not (tmp_path / "p.png").exists()
