@@ -259,7 +259,8 @@ def run(args) -> int:
             for k, view in enumerate(progress(views, args.tour, "tour")):
                 frame = to_uint8(view)
                 write_image(plan.stage(frames, f"frame_{k:04d}.png"), frame)
-                kept.append(frame)
+                if anim:  # only an animation needs the frames in memory (1000 large frames did not fit)
+                    kept.append(frame)
             if anim:
                 _write_animation(plan.stage(anim), kept, args.fps)
             plan.commit()
