@@ -224,7 +224,16 @@ def test_dask_cluster_killed_worker_exactly_once_and_same_pixels(tmp_path, views
         def kill_busy_worker(result):
             if killed:
                 return
-            busy = [addr for addr, keys in client.processing().items() if keys]
+            # wait until a job is inside its command (its staging folder exists) and a worker holds
+            # it: at the first result the other workers could be between jobs (a fast machine
+            # finished the first jobs together and nothing was killed)
+            deadline = time.monotonic() + 30
+            busy = []
+            while time.monotonic() < deadline:
+                busy = [addr for addr, keys in client.processing().items() if keys]
+                if busy and any(tmp_path.rglob(f"{STAGE_PREFIX}*")):
+                    break
+                time.sleep(0.001)
             if busy:
                 pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
                 os.kill(pid, signal.SIGKILL)
@@ -263,3 +272,23 @@ def test_report_and_records_never_replace_the_batch_s_files(tmp_path, views, cap
         assert cli.main(["batch", str(path), "--workers", "1", *extra]) == 1
         assert re.search(match, capsys.readouterr().err)
     assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+
+
+def test_a_failed_commit_replaces_nothing(tmp_path, views):
+    """A stitch-like job with two outputs, one of them an existing folder: the command succeeded
+    in its staging folder, then the commit replaced the first output and failed on the second,
+    leaving a half-committed result and the staging folder. Nothing is moved now unless
+    every file can be, and the staging folder is removed."""
+    path = _make_batch(tmp_path, views)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "stereo_0.png").write_bytes(b"old")
+    (out / "holes.png").mkdir()  # an existing folder where a file output goes
+    doc = json.loads(path.read_text())
+    doc["jobs"] = [{"id": "two", "argv": ["warp", f"views/{views[0].name}.json", "--to", f"views/{views[1].name}.json",
+                                          "-o", "out/stereo_0.png", "--holes-out", "out/holes.png"]}]
+    path.write_text(json.dumps(doc))
+    report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=1)
+    assert report.counts["failed"] == 1 and "is an existing folder" in report.results[0]["error"]
+    assert (out / "stereo_0.png").read_bytes() == b"old" and (out / "holes.png").is_dir()
+    assert not any(tmp_path.rglob(f"{STAGE_PREFIX}*"))

@@ -393,14 +393,20 @@ def _commit(stages: list[Path]) -> list[Path]:
     """Rename every staged file into the stage's parent folder at the same relative path (each
     rename atomic; an output folder gets the new files, other files in it are left alone).
     Returns the final files."""
+    moves = [(src, stage.parent / src.relative_to(stage)) for stage in stages
+             for src in sorted(p for p in stage.rglob("*") if p.is_file())]
+    for _, final in moves:  # nothing is moved unless every file can be (an output that is an
+        if final.is_dir():  # existing folder failed half way, after the others were replaced)
+            raise IsADirectoryError(f"output {final} is an existing folder, expected a file name")
+        for up in final.parents:
+            if up.exists() and not up.is_dir():
+                raise NotADirectoryError(f"output {final}: {up} is a file, expected a folder")
     finals: list[Path] = []
+    for src, final in moves:
+        final.parent.mkdir(parents=True, exist_ok=True)
+        os.replace(src, final)
+        finals.append(final)
     for stage in stages:
-        parent = stage.parent
-        for src in sorted(p for p in stage.rglob("*") if p.is_file()):
-            final = parent / src.relative_to(stage)
-            final.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(src, final)
-            finals.append(final)
         shutil.rmtree(stage, ignore_errors=True)
     return finals
 
@@ -486,7 +492,12 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
             for s in stages:
                 shutil.rmtree(s, ignore_errors=True)
             raise
-        finals = _commit(stages)
+        try:
+            finals = _commit(stages)
+        except OSError:
+            for s in stages:
+                shutil.rmtree(s, ignore_errors=True)
+            raise
         outputs = {os.path.relpath(p, cwd): file_sha256(p) for p in finals}
         doc = {"format": RECORD_FORMAT, "version": 1, "id": job.id, "argv": list(job.argv), "cwd": job.cwd,
                "inputs": inputs, "outputs": outputs, "run": run_id, "attempt": token, "worker": result["worker"],
