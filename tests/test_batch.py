@@ -131,7 +131,8 @@ def test_a_job_never_overwrites_its_own_input(tmp_path, views):
     status = {r["id"]: (r["status"], r["error"]) for r in report.results}
     assert status["direct"][0] == "failed" and "is an input of the job" in status["direct"][1]
     assert status["link"][0] == "failed" and "is an input of the job" in status["link"][1]
-    assert status["folder"][0] == "failed" and "is an input of the job" in status["folder"][1]
+    # (the command sees its final output folder through IBR_BATCH_FINALS and refuses it first)
+    assert status["folder"][0] == "failed" and re.search("is an input of the job|is the input", status["folder"][1])
     assert color.read_bytes() == before and (tmp_path / first).read_bytes() == b_before
     assert status["fine"][0] == "done", status["fine"]  # the same job into another folder
     assert sorted(p.name for p in (tmp_path / "other").iterdir()) == ["frame_000_t0.000.png", "frame_001_t1.000.png"]
@@ -289,6 +290,42 @@ def test_a_failed_commit_replaces_nothing(tmp_path, views):
                                           "-o", "out/stereo_0.png", "--holes-out", "out/holes.png"]}]
     path.write_text(json.dumps(doc))
     report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=1)
-    assert report.counts["failed"] == 1 and "is an existing folder" in report.results[0]["error"]
+    # the command sees the final paths (IBR_BATCH_FINALS) and refuses the folder itself
+    assert report.counts["failed"] == 1 and "holes.png is a folder, expected a file name" in report.results[0]["error"]
     assert (out / "stereo_0.png").read_bytes() == b"old" and (out / "holes.png").is_dir()
     assert not any(tmp_path.rglob(f"{STAGE_PREFIX}*"))
+    # and the commit itself moves nothing unless every staged file can be moved
+    from ibr.sequence.jobs import _commit
+
+    stage = out / f"{STAGE_PREFIX}x-1"
+    stage.mkdir()
+    (stage / "stereo_0.png").write_bytes(b"new")
+    (stage / "holes.png").write_bytes(b"new")
+    with pytest.raises(IsADirectoryError, match="holes.png is an existing folder"):
+        _commit([stage])
+    assert (out / "stereo_0.png").read_bytes() == b"old"
+
+
+def test_a_job_s_own_input_checks_see_the_final_outputs(tmp_path):
+    """``ibr import nerf transforms.json --out images`` with the depth files in images/ is
+    refused run alone ("its file r_0_depth.exr is the input"), but through ``ibr batch`` the
+    command wrote into a staging folder, passed, and the commit replaced the depth files the
+    transforms.json names (halved depths). The command now checks the final paths too."""
+    src = Path(__file__).parent / "data" / "import" / "blender_rgb"
+    (tmp_path / "images").mkdir()
+    for f in src.iterdir():
+        if f.suffix in (".png", ".exr"):
+            shutil.copy(f, tmp_path / "images" / f.name)
+    t = json.loads((src / "transforms.json").read_text())
+    for fr in t["frames"]:
+        fr["file_path"], fr["depth_file_path"] = "images/" + fr["file_path"], "images/" + fr["depth_file_path"]
+    t["depth_unit_scale_factor"] = 0.5
+    (tmp_path / "transforms.json").write_text(json.dumps(t))
+    before = {p.name: p.read_bytes() for p in (tmp_path / "images").iterdir()}
+    assert cli.main(["import", "nerf", str(tmp_path / "transforms.json"), "--out", str(tmp_path / "images")]) == 1
+    jobs = [{"id": "imp", "argv": ["import", "nerf", "transforms.json", "--out", "images"]}]
+    path = tmp_path / "jobs.json"
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 1, "jobs": jobs}))
+    report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=1)
+    assert report.counts["failed"] == 1 and "is the input" in report.results[0]["error"]
+    assert {p.name: p.read_bytes() for p in (tmp_path / "images").iterdir()} == before

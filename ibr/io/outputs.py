@@ -66,7 +66,7 @@ import shutil
 import signal
 import tempfile
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterable
 
@@ -97,6 +97,24 @@ STAGING_PREFIX = ".ibr-staging-"
 
 def _abs(path: Path) -> Path:
     return Path(os.path.abspath(path))
+
+
+#: Environment variable through which ``ibr batch`` tells a command the final path of each output
+#: it redirected into a staging folder (JSON: {absolute staged path: final path}).
+BATCH_FINALS_ENV = "IBR_BATCH_FINALS"
+
+
+def _batch_finals() -> dict:
+    import json
+
+    text = os.environ.get(BATCH_FINALS_ENV)
+    if not text:
+        return {}
+    try:
+        finals = json.loads(text)
+    except ValueError:
+        return {}
+    return finals if isinstance(finals, dict) else {}
 
 
 def same_file(a, b) -> bool:
@@ -306,6 +324,26 @@ class OutputPlan:
                 raise NotADirectoryError(f"{o.option}: {anchor} (on the way to {p}) is not a folder")
             o.create, o.anchor = True, anchor
 
+    def _check_batch_final(self, o: _Output) -> None:
+        """Under ``ibr batch`` the command writes into a staging folder (:mod:`ibr.sequence.jobs`):
+        check the path the output will be renamed to (:data:`BATCH_FINALS_ENV`) as well, against
+        the inputs and for a file output against an existing folder, as a run alone would."""
+        final = _batch_finals().get(str(_abs(o.path)))
+        if final is None:
+            return
+        final = Path(final)
+        if o.folder:
+            for what, i in self.inputs:
+                if same_file(final, i):
+                    raise ValueError(f"{o.option}: {final} is the input {what}; choose another output folder")
+            if final.is_dir():
+                for name in self._own_files(replace(o, path=final)):
+                    self._check_input_clash(replace(o, path=final), final / name)
+        else:
+            if final.is_dir():
+                raise IsADirectoryError(f"{o.option}: {final} is a folder, expected a file name")
+            self._check_input_clash(replace(o, path=final), final)
+
     def _own_files(self, o: _Output) -> list[str]:
         """Names of the existing files in frame folder ``o`` that match its patterns."""
         try:
@@ -325,6 +363,7 @@ class OutputPlan:
         seen: dict[str, _Output] = {}
         for o in self.outputs:
             (self._check_folder if o.folder else self._check_file)(o)
+            self._check_batch_final(o)
             key = os.path.realpath(o.path)
             if key in seen:
                 raise ValueError(f"{o.option}: {o.path} is also the output of {seen[key].option}; "

@@ -57,6 +57,7 @@ from pathlib import Path
 
 from ..base.validate import check_keys
 from ..io.images import atomic_path
+from ..io.outputs import BATCH_FINALS_ENV
 from .files import referenced_files
 
 __all__ = [
@@ -461,8 +462,11 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
             result["outputs"] = sorted(record["outputs"])
             return result
         token = uuid.uuid4().hex[:12]
-        argv, stages, _ = _stage_argv(job, token)
+        argv, stages, staged_to_final = _stage_argv(job, token)
         env = dict(os.environ)
+        # the command checks the final paths too (its own inputs, e.g. the images a transforms.json
+        # names, are known only to it): run alone it refuses what it must not write over
+        env[BATCH_FINALS_ENV] = json.dumps({os.path.abspath(k): os.path.abspath(v) for k, v in staged_to_final.items()})
         for var in THREAD_ENV:
             env[var] = str(threads_per_job)
         try:
