@@ -11,7 +11,8 @@ A batch file lists jobs; a job is any ``ibr`` command line::
 (a bare list of jobs is accepted too). ``argv`` (or ``command``, split like a shell, a leading
 ``ibr`` optional) is the command line; ``id`` (default: a hash of the command line) names the
 job's record; ``outputs`` lists the command-line values that are outputs (default: the values of
-``-o/--out/--output/--video/--contact-sheet/--obj/--ply/--viz/--depth-out/--holes-out``);
+``-o/--out/--output/--video/--contact-sheet/--obj/--ply/--viz/--depth-out/--holes-out/--report/``
+``--coverage/--cube/--site``);
 ``inputs`` adds input files the command line does not name; ``cwd`` (default: the batch file's
 folder) is where relative paths start. Jobs are independent: no job may read another's output.
 
@@ -77,7 +78,7 @@ STAGE_PREFIX = ".ibr-batch-"
 
 #: Options whose value is an output path, for jobs that do not list their ``outputs``.
 OUTPUT_OPTIONS = ("-o", "--out", "--output", "--video", "--contact-sheet", "--obj", "--ply", "--viz",
-                  "--depth-out", "--holes-out")
+                  "--depth-out", "--holes-out", "--report", "--coverage", "--cube", "--site")
 
 #: Thread-count variables set to ``threads_per_job`` in each job's process (the pool, not the job,
 #: uses the cores): numba, OpenMP/BLAS, OpenCV's parallel_for.
