@@ -329,3 +329,19 @@ def test_a_job_s_own_input_checks_see_the_final_outputs(tmp_path):
     report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=1)
     assert report.counts["failed"] == 1 and "is the input" in report.results[0]["error"]
     assert {p.name: p.read_bytes() for p in (tmp_path / "images").iterdir()} == before
+
+
+def test_a_failed_job_leaves_no_new_folders_and_cwd_must_exist(tmp_path, views):
+    """A failed job with ``-o newdir/deeper/x.png`` left newdir/deeper/ behind, and a job whose
+    ``cwd`` did not exist got that folder created by the staging of its outputs."""
+    path = _make_batch(tmp_path, views)
+    doc = json.loads(path.read_text())
+    doc["jobs"] = [{"id": "bad", "argv": ["stereo", "views/missing.json", "-o", "newdir/deeper/x.png"]}]
+    path.write_text(json.dumps(doc))
+    report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=1)
+    assert report.counts["failed"] == 1 and not (tmp_path / "newdir").exists()
+    doc["jobs"] = [{"id": "nowhere", "cwd": "no/such/folder", "argv": ["stereo", "a.json", "-o", "x.png"]}]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match="'cwd' .*no/such/folder is not an existing folder"):
+        load_jobs(path)
+    assert not (tmp_path / "no").exists()

@@ -191,6 +191,8 @@ def _job_from(entry, index: int, base: Path) -> Job:
     if not isinstance(cwd, str):
         raise ValueError(f"{where}: 'cwd' must be a folder path, got {cwd!r}")
     cwd = (base / cwd).resolve()
+    if not cwd.is_dir():  # (a missing one was created by the staging of the outputs)
+        raise ValueError(f"{where}: 'cwd' {cwd} is not an existing folder")
     job_id = entry.get("id")
     if job_id is None:
         digest = hashlib.sha1(json.dumps([argv, str(cwd)]).encode()).hexdigest()[:12]
@@ -362,7 +364,7 @@ def _stage_argv(job: Job, token: str) -> tuple[list[str], list[Path], dict[Path,
     for o in job.outputs:
         final = Path(os.path.normpath(cwd / o))
         parent = final.parent
-        parent.mkdir(parents=True, exist_ok=True)
+        _make_parents(parent)
         stage = stages.setdefault(parent, parent / f"{STAGE_PREFIX}{job.id}-{token}")
         stage.mkdir(exist_ok=True)
         mapping[o] = str(stage / final.name)
@@ -375,6 +377,27 @@ def _stage_argv(job: Job, token: str) -> tuple[list[str], list[Path], dict[Path,
         else:
             argv.append(mapping.get(a, a))
     return argv, list(stages.values()), staged_to_final
+
+
+#: Output folders a job's staging created (removed again, when empty, if the job fails).
+_CREATED: list[Path] = []
+
+
+def _make_parents(folder: Path) -> None:
+    missing = []
+    p = folder
+    while not p.exists():
+        missing.append(p)
+        p = p.parent
+    folder.mkdir(parents=True, exist_ok=True)
+    _CREATED.extend(missing)  # deepest first
+
+
+def _remove_created_folders() -> None:
+    """Remove the (still empty) output folders this process's staging created, deepest first."""
+    while _CREATED:
+        with contextlib.suppress(OSError):
+            _CREATED.pop(0).rmdir()
 
 
 def _remove_stale_stages(job: Job) -> int:
@@ -519,3 +542,6 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
         return result
     finally:
         result["seconds"] = round(time.perf_counter() - start, 4)
+        if result["status"] == "failed":  # folders made only to hold its outputs go again
+            _remove_created_folders()
+        _CREATED.clear()
