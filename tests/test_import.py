@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 
 import numpy as np
@@ -377,3 +378,30 @@ def test_the_manifest_name_is_a_plain_name_and_no_frame_s(tmp_path, capsys):
         assert cli.main(["import", "nerf", str(src / "transforms.json"), "--out", str(out), "--name", bad]) == 1
         assert "--name: " in capsys.readouterr().err
         assert not out.exists() and (src / "transforms.json").read_bytes() == before
+
+
+def test_short_keys_misspelt_are_refused_with_the_nearest(tmp_path):
+    """``fl_yy`` and ``cxx`` in a transforms.json were listed as other tools' keys and ignored (the
+    camera silently took fy = fx, a centred cx); a view file's ``pth`` / ``encodng`` were refused
+    without naming the key meant."""
+    write_image(tmp_path / "a.png", np.zeros((4, 4, 3), np.uint8))
+    for key, near in (("fl_yy", "fl_y"), ("cxx", "cx")):
+        t = {"fl_x": 10, "w": 4, "h": 4, key: 3, "frames": [{"file_path": "a.png", "transform_matrix": np.eye(4).tolist()}]}
+        (tmp_path / "t.json").write_text(json.dumps(t))
+        with pytest.raises(ValueError, match=re.escape(f"unknown key '{key}' (did you mean '{near}'?)")):
+            read_frames("nerf", tmp_path / "t.json")
+    t["aabb_scale"] = 16  # another tool's key: ignored
+    del t["cxx"]
+    (tmp_path / "t.json").write_text(json.dumps(t))
+    assert read_frames("nerf", tmp_path / "t.json")[0].camera.fx == 10
+    from ibr.io import save_view
+
+    save_view(View(np.zeros((4, 4, 3), np.uint8), np.ones((4, 4), np.float32), Camera(10.0, 10.0, 1.5, 1.5, 4, 4), "v"),
+              tmp_path / "v.json")
+    doc = json.loads((tmp_path / "v.json").read_text())
+    for key, near in (("path", "pth"), ("encoding", "encodng")):
+        d = json.loads(json.dumps(doc))
+        d["depth"][near] = d["depth"].pop(key, "z")
+        (tmp_path / "w.json").write_text(json.dumps(d))
+        with pytest.raises(ValueError, match=re.escape(f"unknown key '{near}' (did you mean '{key}'?)")):
+            load_view(tmp_path / "w.json")

@@ -263,6 +263,15 @@ def load_view(path) -> View:
     spec = doc.get("depth")
     if spec is not None:
         dwhere = f"{where}: 'depth'"
+        if isinstance(spec, dict):  # a misspelt 'path' / 'encoding' / 'channel' named, with the nearest
+            enc = spec.get("encoding", "z")
+            params = DEPTH_ENCODINGS[enc][0] + DEPTH_ENCODINGS[enc][1] if enc in DEPTH_ENCODINGS else ()
+            known = ("path", "encoding", "channel") + tuple(params)
+            unknown = [k for k in spec if k not in known]
+            if unknown:
+                near = nearest_name(str(unknown[0]), [k for k in ("path", "encoding", "channel") if k not in spec])
+                if near:
+                    raise ValueError(f"{dwhere}: unknown key {unknown[0]!r} (did you mean {near!r}?)")
         if not isinstance(spec, dict) or not isinstance(spec.get("path"), str) or not spec["path"]:
             raise ValueError(f"{dwhere} must be null or an object with a 'path' string, got {spec!r}")
         check_relative_path(f"{dwhere}: 'path'", spec["path"])

@@ -60,6 +60,14 @@ class ImportReport:
 NEAR_MISS = 0.85
 
 
+def _one_edit(a: str, b: str) -> bool:
+    """``a`` is ``b`` with one character added or changed (``cxx``, ``fl_yy``, ``fl_z`` for ``cx``,
+    ``fl_y``); a shorter ``a`` is not (it would take ``h`` for ``w``)."""
+    if len(a) == len(b):
+        return sum(x != y for x, y in zip(a, b)) == 1
+    return len(a) == len(b) + 1 and any(a[:i] + a[i + 1:] == b for i in range(len(a)))
+
+
 def check_foreign_keys(where: str, doc: dict, used: Iterable[str], report: ImportReport | None) -> None:
     """Other tools' files carry keys we do not need (ignored, and listed in the report); a key
     that is a near miss of one we read (:data:`NEAR_MISS`) is a misspelling and refused."""
@@ -70,7 +78,9 @@ def check_foreign_keys(where: str, doc: dict, used: Iterable[str], report: Impor
         if key in used:
             continue
         ratio, near = max((difflib.SequenceMatcher(None, str(key), u).ratio(), u) for u in used if len(u) >= 5)
-        if ratio >= NEAR_MISS:
+        if ratio < NEAR_MISS:  # short keys (fl_y, cx): one letter added or changed is a misspelling
+            near = next((u for u in used if 2 <= len(u) < 5 and _one_edit(str(key), u)), None)
+        if near is not None:
             raise ValueError(f"{where}: unknown key {key!r} (did you mean {near!r}?)")
         if report is not None:
             report.ignored_keys.append(key)
