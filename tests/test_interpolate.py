@@ -337,3 +337,18 @@ def test_end_points_resolution_changes_and_the_cubic_border():
     flat = View(np.full(a.color.shape, 200, np.uint8), a.depth, a.camera, "flat")
     r = ibr.warp(flat, a.camera.resized(a.camera.width * 2, a.camera.height * 2), fill="none", interpolation="cubic")
     assert np.abs(r.color[~r.holes].astype(int) - 200).max() <= 1
+
+
+def test_a_source_without_any_valid_depth_is_refused_by_name():
+    """``interpolate(a, b)`` with ``b``'s depth all NaN said "depth: no valid pixel to choose a
+    default baseline from" (from deep inside the mesh builder); it names the view now, for warp
+    and interpolate alike (the forward method too)."""
+    from ibr.io import load_view
+    from samples import DATA_DIR
+
+    a, b = load_view(DATA_DIR / "room_a.json"), load_view(DATA_DIR / "room_b.json")
+    nan = View(b.color, np.full(b.depth.shape, np.nan, np.float32), b.camera, "empty")
+    for call in (lambda: ibr.interpolate(a, nan, 0.5), lambda: ibr.warp(nan, a.camera),
+                 lambda: ibr.interpolate(a, nan, 0.5, method="forward")):
+        with pytest.raises(ValueError, match="view 'empty': the depth has no valid pixel"):
+            call()

@@ -106,6 +106,7 @@ class _Source:
         self.meshes: dict = {}
         self._trust: dict = {}
         self.median_depth = None
+        self.any_valid = None  # some finite depth (_check_source)
         self._view = weakref.ref(view)
         self._upsampled: dict = {}
 
@@ -262,6 +263,11 @@ def _check_source(view, name: str) -> None:
             f"{name}: view {view.name!r} has no depth, so it cannot be a source "
             "(a view without depth can only give a target camera)"
         )
+    src = _source(view)
+    if src.any_valid is None:  # once per view
+        src.any_valid = bool(np.isfinite(view.depth).any())
+    if not src.any_valid:
+        raise ValueError(f"{name}: view {view.name!r}: the depth has no valid pixel (all NaN), so it cannot be a source")
 
 
 def _source_maps(views, camera: Camera, method: str, footprint: str, splat: str, mesh_options) -> list:
