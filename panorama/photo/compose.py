@@ -82,9 +82,9 @@ class _Piece:
 
 
 def default_bands(width: int, height: int) -> int:
-    """OpenCV's default number of bands: ceil(log2(5% of sqrt(area))) - 1 (at least 1)."""
+    """OpenCV's default number of bands: ceil(log2(5% of sqrt(area))) - 1, within 1..12."""
     blend_width = math.sqrt(width * height) * 0.05
-    return max(1, int(math.ceil(math.log2(max(blend_width, 2.0)))) - 1)
+    return min(12, max(1, int(math.ceil(math.log2(max(blend_width, 2.0)))) - 1))  # 12: the blender's most
 
 
 # ----------------------------------------------------------------------------- geometry

@@ -66,6 +66,10 @@ class StitchResult:
     report: StitchReport
 
 
+#: Largest default equirect width (the image ceiling for float RGB: 16384 x 8192 = 2^27 pixels).
+MAX_NATIVE_WIDTH = 16384
+
+
 def native_width(focal_px: float) -> int:
     """Equirect width whose equator texel matches a photo's centre pixel: 2 pi f, rounded up to
     a multiple of 16."""
@@ -305,6 +309,10 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
 
     if width is None:
         width = native_width(float(np.median([cameras[k].fx for k in est.used])))
+        if width > MAX_NATIVE_WIDTH:  # a long focal length (1e9 px asked for a 6e9-px equirect)
+            report.notes.append(f"the photos' native equirect width {width} px exceeds {MAX_NATIVE_WIDTH}; "
+                                f"using {MAX_NATIVE_WIDTH} (give width to choose)")
+            width = MAX_NATIVE_WIDTH
     used_imgs = [images[k] for k in est.used]
     used_cams = [cameras[k] for k in est.used]
     used_masks = None if masks is None else [masks[k] for k in est.used]
