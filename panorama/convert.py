@@ -65,7 +65,10 @@ def _depth_array(name: str, img: np.ndarray) -> np.ndarray:
     if negative.any():  # (#12) would become negative planar z in the faces
         raise ValueError(f"{name}: depth must be positive (NaN = no depth), got {int(negative.sum())} negative "
                          f"value(s), min {float(np.min(img[negative])):.6g}")
-    return img.astype(np.float32, copy=False)
+    out = img.astype(np.float32, copy=True)
+    with np.errstate(invalid="ignore"):  # 0 and inf are no depth, as in a View (they came out as depth)
+        out[~((out > 0) & (out < np.inf))] = np.nan
+    return out
 
 
 def _interp(interpolation, depth: bool) -> str:

@@ -399,3 +399,15 @@ def test_sources_taller_than_cv2_remap_allows_are_sampled_in_strips(monkeypatch,
     for e, g in zip(expect, got):
         assert g.shape == e.shape and g.dtype == e.dtype
         np.testing.assert_array_equal(g, e)
+
+
+def test_depth_zero_and_inf_are_no_depth():
+    """0 and +inf in a depth panorama passed as depth (faces held z = 0 and inf); they are no
+    depth (NaN), as in a View."""
+    rng = np.full((16, 32), 2.0, np.float32)
+    rng[3, 5], rng[8, 20] = 0.0, np.inf
+    faces = P.equirect_to_cubemap(rng, 8, layout="list", depth=True)
+    z = np.concatenate([f.ravel() for f in faces])
+    assert not np.any(z == 0) and not np.any(np.isinf(z)) and np.isnan(z).any()
+    view = P.perspective(rng, yaw_deg=0.0, pitch_deg=0.0, fov_deg=120.0, width=16, height=12, depth=True)
+    assert not np.any(np.isinf(view)) and not np.any(view == 0)
