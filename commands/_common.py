@@ -125,7 +125,7 @@ class terminate_as_interrupt:
 def image_for(path, img):
     """``img`` in a dtype the file format of ``path`` stores, so that any colour can be written to
     any advertised extension: float [0, 1] becomes uint8 for .png / .jpg (clipped, rounded),
-    uint16 becomes uint8 for .jpg, uint8 / uint16 become float32 [0, 1] for .exr / .pfm (float64:
+    uint16 becomes uint8 for .jpg (which also drops an alpha channel), uint8 / uint16 become float32 [0, 1] for .exr / .pfm (float64:
     float32 there and for .tif); anything else is returned as is."""
     import numpy as np
 
@@ -133,6 +133,8 @@ def image_for(path, img):
     a = np.asarray(img)
     if ext in (".png", ".jpg", ".jpeg") and a.dtype.kind == "f":
         return np.clip(np.rint(np.nan_to_num(a) * 255.0), 0, 255).astype(np.uint8)
+    if ext in (".jpg", ".jpeg") and a.ndim == 3 and a.shape[2] in (2, 4):  # JPEG holds no alpha
+        a = a[..., : a.shape[2] - 1]
     if ext in (".jpg", ".jpeg") and a.dtype == np.uint16:
         return ((a.astype(np.uint32) + 128) // 257).astype(np.uint8)
     if ext in (".exr", ".pfm", ".tif", ".tiff") and a.dtype == np.float64:
@@ -142,13 +144,15 @@ def image_for(path, img):
     return a
 
 
-def face_file_patterns() -> tuple[str, ...]:
-    """The file names of a folder of cube faces (px.png .. nz.exr, every image extension), for an
-    output plan's frame folder: exactly these, not a user's px.txt or pz.backup.png."""
+def face_file_patterns(ext: str | None = None) -> tuple[str, ...]:
+    """The file names of a folder of cube faces (px.png .. nz.exr, every image extension, and
+    ``ext`` as the user spelt it, e.g. .PNG), for an output plan's frame folder: exactly these,
+    not a user's px.txt or pz.backup.png."""
     from ibr.io.outputs import IMAGE_EXTS
     from panorama.directions import FACE_FILE_NAMES
 
-    return tuple(f"{n}{ext}" for n in FACE_FILE_NAMES for ext in IMAGE_EXTS)
+    exts = IMAGE_EXTS + ((ext,) if ext and ext not in IMAGE_EXTS else ())
+    return tuple(f"{n}{e}" for n in FACE_FILE_NAMES for e in exts)
 
 
 def note_first_run(*modules: str, warm: str = "frame") -> bool:

@@ -150,7 +150,7 @@ def run(args) -> int:
     import numpy as np
 
     import ibr.canvas as C
-    from commands._common import info
+    from commands._common import face_file_patterns, info
     from ibr.io import read_image
     from ibr.io.outputs import IMAGE_EXTS, VIDEO_EXTS, OutputPlan
 
@@ -176,7 +176,7 @@ def run(args) -> int:
         elif video_file:
             plan.add_file("-o", out, VIDEO_EXTS)
         elif face_folder:
-            plan.add_folder("-o", out, patterns=("px.*", "nx.*", "py.*", "ny.*", "pz.*", "nz.*"))
+            plan.add_folder("-o", out, patterns=face_file_patterns())
         else:
             plan.add_file("-o", out, IMAGE_EXTS)
         plan.check()  # every output checked before any work

@@ -63,7 +63,7 @@ def run(args) -> int:
         if files_out:
             if args.depth and ext.lower() not in float_exts:
                 raise ValueError(f"--ext: depth faces are float; use one of {', '.join(float_exts)}, got {ext}")
-            target = plan.add_folder("-o", out, face_file_patterns())
+            target = plan.add_folder("-o", out, face_file_patterns(ext))
         else:
             if args.depth and out.suffix.lower() not in float_exts:
                 raise ValueError(f"-o: depth is float; use one of {', '.join(float_exts)}, got {out.name}")

@@ -25,7 +25,7 @@ def _written_names(frames, sequence_name: str) -> tuple:
     names = [f"{sequence_name}.json"] if len(frames) > 1 else []  # the manifest (write_views)
     for f in frames:
         names += [f"{f.name}.json", f"{f.name}_color.png", f"{f.name}_color.exr", f"{f.name}_depth.exr"]
-    return tuple(glob.escape(n) for n in names)
+    return tuple(glob.escape(n).replace("#", "[#]") for n in names)  # '#' in a pattern means digits
 
 
 def add_arguments(parser) -> None:

@@ -405,3 +405,22 @@ def test_short_keys_misspelt_are_refused_with_the_nearest(tmp_path):
         (tmp_path / "w.json").write_text(json.dumps(d))
         with pytest.raises(ValueError, match=re.escape(f"unknown key '{near}' (did you mean '{key}'?)")):
             load_view(tmp_path / "w.json")
+
+
+def test_other_tools_fx_key_is_ignored_and_a_list_encoding_named(tmp_path):
+    """Regressions of the stricter key checks: another tool's ``fx`` read as a misspelt ``cx``
+    (one changed letter; only an added letter counts now); a view file's ``"encoding": ["z"]``
+    raised TypeError (unhashable) instead of the named error."""
+    write_image(tmp_path / "a.png", np.zeros((4, 4, 3), np.uint8))
+    t = {"fl_x": 10, "w": 4, "h": 4, "fx": 10, "frames": [{"file_path": "a.png", "transform_matrix": np.eye(4).tolist()}]}
+    (tmp_path / "t.json").write_text(json.dumps(t))
+    assert read_frames("nerf", tmp_path / "t.json")[0].camera.fx == 10
+    from ibr.io import save_view
+
+    save_view(View(np.zeros((4, 4, 3), np.uint8), np.ones((4, 4), np.float32), Camera(10.0, 10.0, 1.5, 1.5, 4, 4), "v"),
+              tmp_path / "v.json")
+    doc = json.loads((tmp_path / "v.json").read_text())
+    doc["depth"]["encoding"] = ["z"]
+    (tmp_path / "w.json").write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match="encoding"):
+        load_view(tmp_path / "w.json")

@@ -342,13 +342,14 @@ def test_end_points_resolution_changes_and_the_cubic_border():
 def test_a_source_without_any_valid_depth_is_refused_by_name():
     """``interpolate(a, b)`` with ``b``'s depth all NaN said "depth: no valid pixel to choose a
     default baseline from" (from deep inside the mesh builder); it names the view now, for warp
-    and interpolate alike (the forward method too)."""
+    and interpolate alike; the forward splat still renders the other source."""
     from ibr.io import load_view
     from samples import DATA_DIR
 
     a, b = load_view(DATA_DIR / "room_a.json"), load_view(DATA_DIR / "room_b.json")
     nan = View(b.color, np.full(b.depth.shape, np.nan, np.float32), b.camera, "empty")
-    for call in (lambda: ibr.interpolate(a, nan, 0.5), lambda: ibr.warp(nan, a.camera),
-                 lambda: ibr.interpolate(a, nan, 0.5, method="forward")):
+    for call in (lambda: ibr.interpolate(a, nan, 0.5), lambda: ibr.warp(nan, a.camera)):
         with pytest.raises(ValueError, match="view 'empty': the depth has no valid pixel"):
             call()
+    r = ibr.interpolate(a, nan, 0.5, method="forward", fill="none")  # the splat: a's pixels, no error
+    assert 0 < r.holes.mean() < 0.2

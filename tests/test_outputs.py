@@ -547,3 +547,32 @@ def test_face_folders_and_viewer_sites_leave_look_alike_user_files_alone(tmp_pat
     assert cli.main(["view", str(pano), "--site", str(site), "--force"]) == 0
     left = {p.name for p in site.iterdir()}
     assert set(keep) <= left and "tile-1-px-0-0.png" not in left
+
+
+def test_regressions_of_the_look_alike_fixes(tmp_path, capsys):
+    """Found by the review of these fixes: an import --name holding '#' (a digits wildcard in
+    patterns now) failed after the work; cube faces --ext .PNG failed at commit; RGBA to .jpg
+    (the new JPEG channel check) failed after the work; canvas face folders still removed px.txt."""
+    import json
+
+    from ibr.io import write_image
+    from samples import DATA_DIR
+
+    src = Path(__file__).parent / "data" / "import" / "blender_rgb" / "transforms.json"
+    assert cli.main(["import", "nerf", str(src), "--out", str(tmp_path / "imp"), "--name", "take#1"]) == 0
+    assert (tmp_path / "imp" / "take#1.json").is_file()
+    pano = DATA_DIR / "rig" / "capture_pano_color.png"
+    assert cli.main(["cubemap", str(pano), "-o", str(tmp_path / "faces"), "--ext", ".PNG"]) == 0
+    assert (tmp_path / "faces" / "px.PNG").is_file()
+    rgba = np.dstack([np.full((32, 64, 3), 100, np.uint8), np.full((32, 64), 255, np.uint8)])
+    write_image(tmp_path / "rgba.png", rgba)
+    assert cli.main(["view", str(tmp_path / "rgba.png"), "-o", str(tmp_path / "v.jpg"), "--width", "16",
+                     "--height", "8"]) == 0
+    assert cli.main(["cubemap", str(pano), "-o", str(tmp_path / "scene")]) == 0  # a face-folder panorama
+    folder = tmp_path / "cf"
+    folder.mkdir()
+    (folder / "px.txt").write_bytes(b"user")
+    assert cli.main(["canvas", str(tmp_path / "scene"), "--image", str(tmp_path / "rgba.png"), "--center", "0", "0",
+                     "2", "--normal", "0", "0", "-1", "--size", "1", "0.5", "-o", str(folder)]) == 0
+    assert (folder / "px.txt").read_bytes() == b"user" and (folder / "px.png").is_file()
+    assert json.loads(src.read_text())  # the input untouched

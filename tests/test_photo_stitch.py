@@ -285,3 +285,12 @@ def test_fill_outside_the_output_range_is_refused_before_the_work(sphere):
         with pytest.raises(ValueError, match="fill: expected"):
             stitch_photos(p.images, width=256, fill=bad)
     assert stitch_photos(p.images, width=256, fill=(255, 0, 255)).report.used == [0, 1]
+
+
+def test_an_rgb_fill_for_grey_and_rgba_photos(sphere):
+    """The output is RGB whatever the photos' channels: fill=(255, 0, 255), the docstring's
+    example, was refused for grey and RGBA photos by the new fill check."""
+    p = cut_photos(sphere, [(0.0, 0.0), (45.0, 0.0)], width=160, height=120, hfov_deg=75.0)
+    rgba = [np.dstack([im, np.full(im.shape[:2], 255, np.uint8)]) for im in p.images]
+    r = stitch_photos(rgba, width=256, fill=(255, 0, 255))
+    assert r.image.shape[2] == 3 and tuple(r.image[~r.coverage][0]) == (255, 0, 255)

@@ -265,7 +265,8 @@ def load_view(path) -> View:
         dwhere = f"{where}: 'depth'"
         if isinstance(spec, dict):  # a misspelt 'path' / 'encoding' / 'channel' named, with the nearest
             enc = spec.get("encoding", "z")
-            params = DEPTH_ENCODINGS[enc][0] + DEPTH_ENCODINGS[enc][1] if enc in DEPTH_ENCODINGS else ()
+            params = (DEPTH_ENCODINGS[enc][0] + DEPTH_ENCODINGS[enc][1]
+                      if isinstance(enc, str) and enc in DEPTH_ENCODINGS else ())
             known = ("path", "encoding", "channel") + tuple(params)
             unknown = [k for k in spec if k not in known]
             if unknown:

@@ -255,7 +255,7 @@ def _median_depth_of(view: View) -> float:
     return src.median_depth
 
 
-def _check_source(view, name: str) -> None:
+def _check_source(view, name: str, method: str = "mesh") -> None:
     if not isinstance(view, View):
         raise TypeError(f"{name}: expected an ibr View, got {type(view).__name__}")
     if view.depth is None:
@@ -263,11 +263,14 @@ def _check_source(view, name: str) -> None:
             f"{name}: view {view.name!r} has no depth, so it cannot be a source "
             "(a view without depth can only give a target camera)"
         )
+    if method != "mesh":  # the forward splat draws nothing from it (holes), the mesh has no quad to build
+        return
     src = _source(view)
     if src.any_valid is None:  # once per view
         src.any_valid = bool(np.isfinite(view.depth).any())
     if not src.any_valid:
-        raise ValueError(f"{name}: view {view.name!r}: the depth has no valid pixel (all NaN), so it cannot be a source")
+        raise ValueError(f"{name}: view {view.name!r}: the depth has no valid pixel (all NaN), so it cannot be a "
+                         "mesh source")
 
 
 def _source_maps(views, camera: Camera, method: str, footprint: str, splat: str, mesh_options) -> list:
@@ -463,7 +466,7 @@ def warp(
 
     check_choice("splat", splat, SPLATS)  # checked for the mesh method too, where it is unused
     k = check_supersample(supersample)
-    _check_source(view, "view")
+    _check_source(view, "view", method)
     camera = _check_target(camera)
     mesh_options = check_mesh_options(mesh_options)
     view = _source(view).upsampled(k) if k > 1 else view
@@ -529,8 +532,8 @@ def iter_interpolate(
         raise TypeError(f"silhouettes: expected True or False, got {silhouettes!r}")
     depth_tol = check_positive("depth_tol", depth_tol)
     k = check_supersample(supersample)
-    _check_source(view_a, "view_a")
-    _check_source(view_b, "view_b")
+    _check_source(view_a, "view_a", method)
+    _check_source(view_b, "view_b", method)
     if view_a.shape != view_b.shape:
         raise ValueError(
             f"view_b: size {view_b.camera.width}x{view_b.camera.height} differs from view_a's "

@@ -291,25 +291,27 @@ def check_batch_files(jobs, jobs_path, records, report) -> None:
     """Refuse (ValueError, before any job runs) a batch ``report`` file or a job record
     (``records/<id>.json``) that would replace the batch file itself or an input or output of a
     job (``--report jobs.json`` replaced the job file; ``--records .`` with a job ``room_a``
-    wrote a record over the view file room_a.json)."""
-    from ..io.outputs import same_file
-
-    files = {}  # path -> what it is
-    files[Path(jobs_path)] = "the batch file"
+    wrote a record over the view file room_a.json). Paths are compared after resolving links,
+    one set lookup each; a job whose declared input is missing is left to fail on its own."""
+    files = {os.path.realpath(jobs_path): "the batch file"}
     for job in jobs:
-        for f in _input_files(job):
-            files.setdefault(f, f"an input of job {job.id}")
+        try:
+            inputs = _input_files(job)
+        except (OSError, ValueError):
+            inputs = []
+        for f in inputs:
+            files.setdefault(os.path.realpath(f), f"an input of job {job.id}")
         for o in job.outputs:
-            files.setdefault(Path(job.cwd) / o, f"an output of job {job.id}")
+            files.setdefault(os.path.realpath(Path(job.cwd) / o), f"an output of job {job.id}")
     records = Path(records)
     if records.exists() and not records.is_dir():
         raise NotADirectoryError(f"--records: {records} is a file, expected a folder for the job records")
     written = [("--report", Path(report))] + [("--records", _record_path(records, job)) for job in jobs]
     for option, path in written:
-        for f, what in files.items():
-            if same_file(path, f):
-                raise ValueError(f"{option}: {path} is {what}; choose another "
-                                 f"{'report file' if option == '--report' else 'records folder'}")
+        what = files.get(os.path.realpath(path))
+        if what is not None:
+            raise ValueError(f"{option}: {path} is {what}; choose another "
+                             f"{'report file' if option == '--report' else 'records folder'}")
 
 # --------------------------------------------------------------------------- records
 def _record_path(records: Path, job: Job) -> Path:
@@ -352,7 +354,7 @@ def _append_log(records: Path, line: dict) -> None:
 
 
 # --------------------------------------------------------------------------- staging
-def _stage_argv(job: Job, token: str) -> tuple[list[str], list[Path], dict[Path, Path]]:
+def _stage_argv(job: Job, token: str, created: list | None = None) -> tuple[list[str], list[Path], dict[Path, Path]]:
     """The command line with every output redirected into a staging folder beside it.
 
     Returns (argv, staging folders, {staged output path: final output path}).
@@ -364,7 +366,7 @@ def _stage_argv(job: Job, token: str) -> tuple[list[str], list[Path], dict[Path,
     for o in job.outputs:
         final = Path(os.path.normpath(cwd / o))
         parent = final.parent
-        _make_parents(parent)
+        _make_parents(parent, created if created is not None else [])
         stage = stages.setdefault(parent, parent / f"{STAGE_PREFIX}{job.id}-{token}")
         stage.mkdir(exist_ok=True)
         mapping[o] = str(stage / final.name)
@@ -379,25 +381,22 @@ def _stage_argv(job: Job, token: str) -> tuple[list[str], list[Path], dict[Path,
     return argv, list(stages.values()), staged_to_final
 
 
-#: Output folders a job's staging created (removed again, when empty, if the job fails).
-_CREATED: list[Path] = []
-
-
-def _make_parents(folder: Path) -> None:
+def _make_parents(folder: Path, created: list) -> None:
+    """``folder`` and its missing parents; the ones made go to ``created`` (deepest first)."""
     missing = []
     p = folder
     while not p.exists():
         missing.append(p)
         p = p.parent
     folder.mkdir(parents=True, exist_ok=True)
-    _CREATED.extend(missing)  # deepest first
+    created.extend(missing)
 
 
-def _remove_created_folders() -> None:
-    """Remove the (still empty) output folders this process's staging created, deepest first."""
-    while _CREATED:
+def _remove_created_folders(created: list) -> None:
+    """Remove the (still empty) output folders a job's staging created, deepest first."""
+    for folder in created:
         with contextlib.suppress(OSError):
-            _CREATED.pop(0).rmdir()
+            folder.rmdir()
 
 
 def _remove_stale_stages(job: Job) -> int:
@@ -469,6 +468,7 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
         job = Job(job["id"], tuple(job["argv"]), job["cwd"], tuple(job["outputs"]), tuple(job.get("inputs", ())))
     records = Path(records)
     start = time.perf_counter()
+    created: list[Path] = []  # output folders made for this job's staging (removed if it fails)
     result = {"id": job.id, "argv": list(job.argv), "status": "failed", "seconds": 0.0,
               "worker": f"{socket.gethostname()}:{os.getpid()}", "returncode": None, "error": "",
               "outputs": [], "interrupted_attempts": 0, "recovered": False}
@@ -486,7 +486,7 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
             result["outputs"] = sorted(record["outputs"])
             return result
         token = uuid.uuid4().hex[:12]
-        argv, stages, staged_to_final = _stage_argv(job, token)
+        argv, stages, staged_to_final = _stage_argv(job, token, created)
         env = dict(os.environ)
         # the command checks the final paths too (its own inputs, e.g. the images a transforms.json
         # names, are known only to it): run alone it refuses what it must not write over
@@ -543,5 +543,4 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
     finally:
         result["seconds"] = round(time.perf_counter() - start, 4)
         if result["status"] == "failed":  # folders made only to hold its outputs go again
-            _remove_created_folders()
-        _CREATED.clear()
+            _remove_created_folders(created)

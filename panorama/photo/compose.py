@@ -288,9 +288,8 @@ def _check_fill(fill, dtype: np.dtype, shape) -> None:
     """``fill``: a finite value (or one per channel) the output dtype holds (``--fill 300`` for
     uint8 photos was an OverflowError after the work)."""
     f = np.asarray(fill, dtype=np.float64) if not isinstance(fill, (bool, str)) else np.array(np.nan)
-    channels = shape[2] if len(shape) == 3 else 1
-    if f.ndim > 1 or (f.ndim == 1 and f.size not in (1, channels)) or not np.all(np.isfinite(f)):
-        raise ValueError(f"fill: expected a finite value or one per channel ({channels}), got {fill!r}")
+    if f.ndim > 1 or (f.ndim == 1 and f.size not in (1, 3)) or not np.all(np.isfinite(f)):  # the output is RGB
+        raise ValueError(f"fill: expected a finite value or one per RGB channel, got {fill!r}")
     if dtype.kind == "u" and (np.any(f < 0) or np.any(f > np.iinfo(dtype).max)):
         raise ValueError(f"fill: expected values in [0, {np.iinfo(dtype).max}] for {dtype} photos, got {fill!r}")
 

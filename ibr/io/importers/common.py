@@ -61,10 +61,8 @@ NEAR_MISS = 0.85
 
 
 def _one_edit(a: str, b: str) -> bool:
-    """``a`` is ``b`` with one character added or changed (``cxx``, ``fl_yy``, ``fl_z`` for ``cx``,
-    ``fl_y``); a shorter ``a`` is not (it would take ``h`` for ``w``)."""
-    if len(a) == len(b):
-        return sum(x != y for x, y in zip(a, b)) == 1
+    """``a`` is ``b`` with one character added (``cxx``, ``fl_yy`` for ``cx``, ``fl_y``); a changed
+    character is not (other tools' ``fx`` would read as ``cx``), nor a shorter ``a``."""
     return len(a) == len(b) + 1 and any(a[:i] + a[i + 1:] == b for i in range(len(a)))
 
 
