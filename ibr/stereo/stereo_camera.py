@@ -332,8 +332,9 @@ def auto_stereo(depth, *, max_angle_deg: float = DEFAULT_MAX_ANGLE_DEG,
 
     * ``"balanced"`` puts f at the harmonic mean ``2 / (1/z_near + 1/z_far)``, where the crossed
       and uncrossed extremes have equal magnitude, and takes the largest e that keeps both within
-      the angle limit (:func:`max_interaxial_for_range`). f <= 2 z_near always holds, so the
-      nearest object is never closer than f/2.
+      the angle limit (:func:`max_interaxial_for_range`), at most :data:`MAX_E_OVER_SEED` times
+      the seed's e (a nearly flat scene allows any e). f <= 2 z_near always holds, so the nearest
+      object is never closer than f/2.
     * ``"seed"`` follows seed 000's recipe literally: f = 2 z_near (the nearest object exactly at
       f/2) and e = 2 f tan(beta/2) (eq. 12), safe for any far depth.
 
