@@ -131,10 +131,10 @@ def image_for(path, img):
 
     ext = Path(path).suffix.lower()
     a = np.asarray(img)
-    if ext in (".png", ".jpg", ".jpeg") and a.dtype.kind == "f":
-        return np.clip(np.rint(np.nan_to_num(a) * 255.0), 0, 255).astype(np.uint8)
     if ext in (".jpg", ".jpeg") and a.ndim == 3 and a.shape[2] in (2, 4):  # JPEG holds no alpha
         a = a[..., : a.shape[2] - 1]
+    if ext in (".png", ".jpg", ".jpeg") and a.dtype.kind == "f":
+        return np.clip(np.rint(np.nan_to_num(a) * 255.0), 0, 255).astype(np.uint8)
     if ext in (".jpg", ".jpeg") and a.dtype == np.uint16:
         return ((a.astype(np.uint32) + 128) // 257).astype(np.uint8)
     if ext in (".exr", ".pfm", ".tif", ".tiff") and a.dtype == np.float64:
@@ -152,7 +152,9 @@ def face_file_patterns(ext: str | None = None) -> tuple[str, ...]:
     from panorama.directions import FACE_FILE_NAMES
 
     exts = IMAGE_EXTS + ((ext,) if ext and ext not in IMAGE_EXTS else ())
-    return tuple(f"{n}{e}" for n in FACE_FILE_NAMES for e in exts)
+    # '[pP][nN][gG]': an earlier run's px.PNG is replaced by px.png too
+    anycase = tuple("." + "".join(f"[{c.lower()}{c.upper()}]" if c.isalpha() else c for c in e[1:]) for e in exts)
+    return tuple(dict.fromkeys(f"{n}{e}" for n in FACE_FILE_NAMES for e in anycase))
 
 
 def note_first_run(*modules: str, warm: str = "frame") -> bool:

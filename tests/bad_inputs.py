@@ -405,7 +405,7 @@ _add("stereo on depth 1e30", C, "error", r"nan.json|far.json: depth: valid value
      argv=("stereo", "{d}/far.json", "-o", "{d}/s.png"), issue=True)
 _add("warp on depth 1e-30", C, "error", r"near.json: depth: valid values must lie in", argv=("warp", "{d}/near.json", "--to",
      "{d}/b.json", "-o", "{d}/o.png"), issue=True)
-_add("warp on all-NaN depth", C, "error", r"view 'nan': the depth has no valid pixel \(all NaN\), so it cannot be a mesh source", argv=("warp", "{d}/nan.json", "--to", "{d}/b.json", "-o",
+_add("warp on all-NaN depth", C, "error", r"view 'nan': the depth has no valid pixel \(all NaN\), so it cannot be a source", argv=("warp", "{d}/nan.json", "--to", "{d}/b.json", "-o",
      "{d}/o.png"))
 _add("warp --method unknown", U, "usage", r"argument --method: invalid choice", argv=("warp", "{d}/a.json", "--to", "{d}/b.json",
      "-o", "{d}/o.png", "--method", "magic"))

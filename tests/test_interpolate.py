@@ -348,7 +348,8 @@ def test_a_source_without_any_valid_depth_is_refused_by_name():
 
     a, b = load_view(DATA_DIR / "room_a.json"), load_view(DATA_DIR / "room_b.json")
     nan = View(b.color, np.full(b.depth.shape, np.nan, np.float32), b.camera, "empty")
-    for call in (lambda: ibr.interpolate(a, nan, 0.5), lambda: ibr.warp(nan, a.camera)):
+    for call in (lambda: ibr.interpolate(a, nan, 0.5), lambda: ibr.warp(nan, a.camera),
+                 lambda: ibr.warp(nan, a.camera, method="forward")):
         with pytest.raises(ValueError, match="view 'empty': the depth has no valid pixel"):
             call()
     r = ibr.interpolate(a, nan, 0.5, method="forward", fill="none")  # the splat: a's pixels, no error

@@ -576,3 +576,31 @@ def test_regressions_of_the_look_alike_fixes(tmp_path, capsys):
                      "2", "--normal", "0", "0", "-1", "--size", "1", "0.5", "-o", str(folder)]) == 0
     assert (folder / "px.txt").read_bytes() == b"user" and (folder / "px.png").is_file()
     assert json.loads(src.read_text())  # the input untouched
+
+
+def test_last_review_round(tmp_path):
+    """(1) A float RGBA image to .jpg kept its alpha (converted to uint8 first); (2) faces of an
+    earlier run spelt px.PNG stayed beside the new px.png; (3) a job with one missing declared
+    input lost the protection of its existing inputs against --report; (4) the folders a failed
+    job's staging created were removed shallowest-first across outputs (one stayed)."""
+    import json
+
+    from commands._common import face_file_patterns, image_for
+    from ibr.io.outputs import matches_patterns
+    from ibr.sequence import load_jobs, run_batch
+    from ibr.sequence.jobs import check_batch_files
+
+    rgba = np.full((4, 4, 4), 0.5, np.float32)
+    assert image_for(Path("v.jpg"), rgba).shape == (4, 4, 3) and image_for(Path("v.jpg"), rgba).dtype == np.uint8
+    assert matches_patterns("px.PNG", face_file_patterns(".png")) and not matches_patterns("px.txt", face_file_patterns())
+    (tmp_path / "scene.png").write_bytes(b"input")
+    jobs = [{"id": "j1", "argv": ["stereo", "scene.png", "-o", "o.png"], "inputs": ["missing.json"]}]
+    path = tmp_path / "jobs.json"
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 1, "jobs": jobs}))
+    with pytest.raises(ValueError, match="--report: .*scene.png is an input of job j1"):
+        check_batch_files(load_jobs(path), path, tmp_path / ".ibr-batch", tmp_path / "scene.png")
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 1,
+                                "jobs": [{"id": "both", "argv": ["warp", "nothere.json", "--to", "nothere.json",
+                                                                 "-o", "new/a/x.png", "--holes-out", "new/b/y.png"]}]}))
+    report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=1)
+    assert report.counts["failed"] == 1 and not (tmp_path / "new").exists()

@@ -263,14 +263,14 @@ def _check_source(view, name: str, method: str = "mesh") -> None:
             f"{name}: view {view.name!r} has no depth, so it cannot be a source "
             "(a view without depth can only give a target camera)"
         )
-    if method != "mesh":  # the forward splat draws nothing from it (holes), the mesh has no quad to build
+    if method != "mesh":  # beside another source the forward splat draws nothing from it (holes)
         return
     src = _source(view)
     if src.any_valid is None:  # once per view
         src.any_valid = bool(np.isfinite(view.depth).any())
     if not src.any_valid:
         raise ValueError(f"{name}: view {view.name!r}: the depth has no valid pixel (all NaN), so it cannot be a "
-                         "mesh source")
+                         "source")
 
 
 def _source_maps(views, camera: Camera, method: str, footprint: str, splat: str, mesh_options) -> list:
@@ -466,7 +466,7 @@ def warp(
 
     check_choice("splat", splat, SPLATS)  # checked for the mesh method too, where it is unused
     k = check_supersample(supersample)
-    _check_source(view, "view", method)
+    _check_source(view, "view")  # one source: without any valid depth nothing can be drawn, either method
     camera = _check_target(camera)
     mesh_options = check_mesh_options(mesh_options)
     view = _source(view).upsampled(k) if k > 1 else view

@@ -297,8 +297,9 @@ def check_batch_files(jobs, jobs_path, records, report) -> None:
     for job in jobs:
         try:
             inputs = _input_files(job)
-        except (OSError, ValueError):
-            inputs = []
+        except (OSError, ValueError):  # a declared input is missing: the job fails on its own, but
+            cwd = Path(job.cwd)        # every input that does exist is still protected here
+            inputs = [cwd / n for n in list(job.argv[1:]) + list(job.inputs) if (cwd / n).is_file()]
         for f in inputs:
             files.setdefault(os.path.realpath(f), f"an input of job {job.id}")
         for o in job.outputs:
@@ -394,7 +395,7 @@ def _make_parents(folder: Path, created: list) -> None:
 
 def _remove_created_folders(created: list) -> None:
     """Remove the (still empty) output folders a job's staging created, deepest first."""
-    for folder in created:
+    for folder in sorted(created, key=lambda p: len(p.parts), reverse=True):  # deepest first, all outputs
         with contextlib.suppress(OSError):
             folder.rmdir()
 
