@@ -436,6 +436,10 @@ def _size(text: str) -> tuple[int, int]:
     return int(m[1]), int(m[2])
 
 
+#: Most ground-truth frames ``ibr samples --sequence`` writes (like the other commands' frame counts).
+MAX_SAMPLE_FRAMES = 100000
+
+
 def run_samples_sequence(args) -> int:
     """Write ``<scene>_walk.json`` (keys) and ``<scene>_truth.json`` (exact frames) into ``--out``."""
     from pathlib import Path
@@ -452,6 +456,10 @@ def run_samples_sequence(args) -> int:
         raise ValueError(f"--factor: expected an integer >= 1, got {args.factor}")
     if not args.fps > 0:
         raise ValueError(f"--fps: expected a positive frame rate, got {args.fps}")
+    frames_total = (args.keys - 1) * args.factor + 1  # the ground truth's frames (each kept until written)
+    if frames_total > MAX_SAMPLE_FRAMES:  # --keys 10000 --factor 1000 ran for hours, 10 GB before a frame
+        raise ValueError(f"--keys, --factor: {args.keys} keys x {args.factor} make {frames_total} ground-truth frames; "
+                         f"at most {MAX_SAMPLE_FRAMES}")
     width, height = _size(args.size)
     out = Path(args.out)
     keys_name, truth_name = f"{args.scene}_walk", f"{args.scene}_truth"

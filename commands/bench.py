@@ -79,14 +79,16 @@ def run(args) -> int:
         module = importlib.util.module_from_spec(spec)
         sys.modules[spec.name] = module
         spec.loader.exec_module(module)
-        for name in ("RESULTS", "DOCS"):  # results and figure copies go to the user's folder
-            if hasattr(module, name):
-                setattr(module, name, out)
+        for name, folder in (("RESULTS", out), ("DOCS", out), ("CACHE", out / "cache")):
+            if hasattr(module, name):  # results, figure copies and caches go to the user's folder
+                setattr(module, name, folder)
         if not hasattr(module, "main"):
             raise RuntimeError(f"{path.name}: has no main(argv) function")
-        try:
+        import inspect
+
+        if inspect.signature(module.main).parameters:  # main(argv); a TypeError inside it is its own
             result = module.main(argv)
-        except TypeError:  # a main() without argv
+        else:  # a main() without argv reads sys.argv
             saved = sys.argv
             sys.argv = [str(path)] + argv
             try:

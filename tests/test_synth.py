@@ -348,3 +348,17 @@ def test_bundled_samples_match_a_fresh_render():
             fresh_c = np.rint(fresh.color.astype(np.float64) * 255).astype(np.int16)
             assert view.color.dtype == np.uint8
             assert np.max(np.abs(stored_c - fresh_c)) <= 1
+
+
+def test_review_findings_of_samples_bench_and_make_scene(tmp_path, capsys):
+    """``ibr samples --sequence --keys 10000 --factor 1000`` (10 million frames) ran for hours
+    before its first output: at most 100000 ground-truth frames; ``make_scene(specular=-0.5)``
+    and NaN were ignored (``Scene`` refuses them)."""
+    import cli
+    from ibr.synth import make_scene
+
+    assert cli.main(["samples", "--sequence", "--keys", "10000", "--factor", "1000", "--out", str(tmp_path / "s")]) == 1
+    assert "at most 100000" in capsys.readouterr().err and not (tmp_path / "s").exists()
+    for bad in (-0.5, float("nan"), 2.0):
+        with pytest.raises(ValueError, match="specular: expected a weight in"):
+            make_scene("room", specular=bad)
