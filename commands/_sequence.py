@@ -436,8 +436,10 @@ def _size(text: str) -> tuple[int, int]:
     return int(m[1]), int(m[2])
 
 
-#: Most ground-truth frames ``ibr samples --sequence`` writes (like the other commands' frame counts).
+#: Most ground-truth frames ``ibr samples --sequence`` writes (like the other commands' frame counts),
+#: and the most memory they may hold (each frame is kept until all are written).
 MAX_SAMPLE_FRAMES = 100000
+MAX_SAMPLE_BYTES = 4 * 2**30
 
 
 def run_samples_sequence(args) -> int:
@@ -461,6 +463,10 @@ def run_samples_sequence(args) -> int:
         raise ValueError(f"--keys, --factor: {args.keys} keys x {args.factor} make {frames_total} ground-truth frames; "
                          f"at most {MAX_SAMPLE_FRAMES}")
     width, height = _size(args.size)
+    held = frames_total * width * height * 7  # every frame's RGB and float depth until written
+    if held > MAX_SAMPLE_BYTES:
+        raise ValueError(f"--keys, --factor, --size: {frames_total} frames of {width}x{height} would hold "
+                         f"{held / 2**30:.1f} GiB; at most {MAX_SAMPLE_BYTES / 2**30:.0f} GiB")
     out = Path(args.out)
     keys_name, truth_name = f"{args.scene}_walk", f"{args.scene}_truth"
     pats = tuple(f"{n}{suffix}" for n in (keys_name, truth_name)

@@ -79,9 +79,9 @@ def run(args) -> int:
         module = importlib.util.module_from_spec(spec)
         sys.modules[spec.name] = module
         spec.loader.exec_module(module)
-        for name, folder in (("RESULTS", out), ("DOCS", out), ("CACHE", out / "cache")):
+        for name, where in (("RESULTS", out), ("DOCS", out), ("CACHE", out / "cache")):
             if hasattr(module, name):  # results, figure copies and caches go to the user's folder
-                setattr(module, name, folder)
+                setattr(module, name, where)
         if not hasattr(module, "main"):
             raise RuntimeError(f"{path.name}: has no main(argv) function")
         import inspect

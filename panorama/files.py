@@ -29,9 +29,10 @@ _EXTS = FACE_EXTS
 def find_face_files(folder) -> list[Path]:
     """The six face files ``px.* .. nz.*`` of ``folder`` in FACE_NAMES order."""
     folder = Path(folder)
+    present = {p.name.lower(): p for p in folder.iterdir() if p.is_file()} if folder.is_dir() else {}
     out = []
-    for name in FACE_FILE_NAMES:
-        hits = [folder / f"{name}{ext}" for ext in _EXTS if (folder / f"{name}{ext}").is_file()]
+    for name in FACE_FILE_NAMES:  # any case of the extension (px.PNG as written with --ext .PNG)
+        hits = [present[f"{name}{ext}"] for ext in _EXTS if f"{name}{ext}" in present]
         if not hits:
             raise FileNotFoundError(
                 f"{folder}: no face file {name}.<ext> (a face folder holds "

@@ -604,3 +604,42 @@ def test_last_review_round(tmp_path):
                                                                  "-o", "new/a/x.png", "--holes-out", "new/b/y.png"]}]}))
     report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=1)
     assert report.counts["failed"] == 1 and not (tmp_path / "new").exists()
+
+
+def test_final_review_round(tmp_path, monkeypatch, capsys):
+    """(1) ``ibr bench a b`` looked for the second topic's script in the first one's cache folder;
+    (2) --report over an input that a view names, when another declared input was missing, and
+    over a hard link of the batch file; (3) face folders written as px.PNG could not be read back."""
+    import json
+    import os
+
+    import commands.bench as bench
+    from ibr.sequence import load_jobs
+    from ibr.sequence.jobs import check_batch_files
+    from panorama.files import find_face_files
+
+    fake = tmp_path / "benchmarks"
+    fake.mkdir()
+    for t in ("a", "b"):
+        (fake / f"bench_{t}.py").write_text("CACHE = None\ndef main(argv=None):\n    print('ran')\n    return 0\n")
+    monkeypatch.setattr(bench, "_bench_dir", lambda: fake)
+    assert cli.main(["bench", "a", "b", "--out", str(tmp_path / "o")]) == 0
+    assert capsys.readouterr().out.count("ran") == 2
+    d = tmp_path / "batch"
+    (d / "views").mkdir(parents=True)
+    (d / "views" / "v_color.png").write_bytes(b"png")
+    (d / "views" / "v.json").write_text(json.dumps({"format": "ibr-view", "version": 1, "color": "v_color.png",
+                                                    "camera": {}}))
+    path = d / "jobs.json"
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 1, "jobs": [
+        {"id": "j1", "argv": ["stereo", "views/v.json", "-o", "o.png"], "inputs": ["missing.json"]}]}))
+    with pytest.raises(ValueError, match="--report: .*v_color.png is an input of job j1"):
+        check_batch_files(load_jobs(path), path, d / ".ibr-batch", d / "views" / "v_color.png")
+    os.link(path, d / "alias.json")
+    with pytest.raises(ValueError, match="--report: .*alias.json is the batch file"):
+        check_batch_files(load_jobs(path), path, d / ".ibr-batch", d / "alias.json")
+    faces = tmp_path / "faces"
+    faces.mkdir()
+    for n in ("px", "nx", "py", "ny", "pz", "nz"):
+        (faces / f"{n}.PNG").write_bytes(b"x")
+    assert [p.name for p in find_face_files(faces)][0] == "px.PNG"

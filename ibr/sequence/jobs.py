@@ -255,9 +255,10 @@ def file_sha256(path) -> str:
     return h.hexdigest()
 
 
-def _input_files(job: Job) -> list[Path]:
+def _input_files(job: Job, *, strict: bool = True) -> list[Path]:
     """Every input file of ``job`` (sorted): the command line's non-output values that exist,
-    what they name (:func:`ibr.sequence.referenced_files`), and ``inputs``."""
+    what they name (:func:`ibr.sequence.referenced_files`), and ``inputs`` (``strict``: a missing
+    declared input raises)."""
     cwd = Path(job.cwd)
     outs = set(job.outputs)
     names = [v for v in job.argv[1:] if v not in outs and not v.startswith("-")]
@@ -269,7 +270,7 @@ def _input_files(job: Job) -> list[Path]:
         if p.exists():
             files.update(referenced_files(p))
     for n in job.inputs:
-        if not (cwd / n).exists():
+        if strict and not (cwd / n).exists():
             raise FileNotFoundError(f"job {job.id}: input {n!r} does not exist in {cwd}")
     return sorted(files)
 
@@ -295,21 +296,26 @@ def check_batch_files(jobs, jobs_path, records, report) -> None:
     one set lookup each; a job whose declared input is missing is left to fail on its own."""
     files = {os.path.realpath(jobs_path): "the batch file"}
     for job in jobs:
-        try:
-            inputs = _input_files(job)
-        except (OSError, ValueError):  # a declared input is missing: the job fails on its own, but
-            cwd = Path(job.cwd)        # every input that does exist is still protected here
-            inputs = [cwd / n for n in list(job.argv[1:]) + list(job.inputs) if (cwd / n).is_file()]
-        for f in inputs:
+        # a missing declared input fails its job later; every input that exists is protected here
+        for f in _input_files(job, strict=False):
             files.setdefault(os.path.realpath(f), f"an input of job {job.id}")
         for o in job.outputs:
             files.setdefault(os.path.realpath(Path(job.cwd) / o), f"an output of job {job.id}")
+    inodes = {}  # hard links (and case-insensitive volumes): the same file under another name
+    for f, what in files.items():
+        with contextlib.suppress(OSError):
+            st = os.stat(f)
+            inodes.setdefault((st.st_dev, st.st_ino), what)
     records = Path(records)
     if records.exists() and not records.is_dir():
         raise NotADirectoryError(f"--records: {records} is a file, expected a folder for the job records")
     written = [("--report", Path(report))] + [("--records", _record_path(records, job)) for job in jobs]
     for option, path in written:
         what = files.get(os.path.realpath(path))
+        if what is None:
+            with contextlib.suppress(OSError):
+                st = os.stat(path)
+                what = inodes.get((st.st_dev, st.st_ino))
         if what is not None:
             raise ValueError(f"{option}: {path} is {what}; choose another "
                              f"{'report file' if option == '--report' else 'records folder'}")
@@ -364,14 +370,19 @@ def _stage_argv(job: Job, token: str, created: list | None = None) -> tuple[list
     stages: dict[Path, Path] = {}
     mapping: dict[str, str] = {}
     staged_to_final: dict[Path, Path] = {}
-    for o in job.outputs:
-        final = Path(os.path.normpath(cwd / o))
-        parent = final.parent
-        _make_parents(parent, created if created is not None else [])
-        stage = stages.setdefault(parent, parent / f"{STAGE_PREFIX}{job.id}-{token}")
-        stage.mkdir(exist_ok=True)
-        mapping[o] = str(stage / final.name)
-        staged_to_final[stage / final.name] = final
+    try:
+        for o in job.outputs:
+            final = Path(os.path.normpath(cwd / o))
+            parent = final.parent
+            _make_parents(parent, created if created is not None else [])
+            stage = stages.setdefault(parent, parent / f"{STAGE_PREFIX}{job.id}-{token}")
+            stage.mkdir(exist_ok=True)
+            mapping[o] = str(stage / final.name)
+            staged_to_final[stage / final.name] = final
+    except OSError:  # (an output's folder is a file): its staging folders so far go again
+        for stage in stages.values():
+            shutil.rmtree(stage, ignore_errors=True)
+        raise
     argv = []
     for a in job.argv:
         if a.startswith("-") and "=" in a:

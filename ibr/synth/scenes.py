@@ -220,7 +220,8 @@ def make_scene(name: str, *, specular: float = 0.0) -> Scene:
     """
     if not isinstance(name, str) or name not in SCENES:
         raise ValueError(f"name: unknown scene {name!r}; expected one of {', '.join(map(repr, SCENES))}")
-    if isinstance(specular, bool) or not isinstance(specular, (int, float)) or not 0 <= specular <= 1:
+    if isinstance(specular, (bool, np.bool_)) or not isinstance(specular, (int, float, np.integer, np.floating)) \
+            or not 0 <= specular <= 1:
         raise ValueError(f"specular: expected a weight in [0, 1], got {specular!r}")  # as Scene(specular=...)
     scene = build_scene(name)
     return scene.with_specular(specular) if specular > 0 else scene
