@@ -309,12 +309,8 @@ class OutputPlan:
                                     "exist; create that folder or choose another")
         if p.exists() and not p.is_dir():
             raise NotADirectoryError(f"{o.option}: {p} exists and is not a folder")
-        for what, i in self.inputs:
-            if same_file(p, i):
-                raise ValueError(f"{o.option}: {p} is the input {what}; choose another output folder")
+        self._check_folder_inputs(o)
         if p.is_dir():
-            for name in self._own_files(o):
-                self._check_input_clash(o, p / name)
             o.create = False
         else:
             anchor = _abs(p).parent
@@ -323,6 +319,17 @@ class OutputPlan:
             if not anchor.is_dir():
                 raise NotADirectoryError(f"{o.option}: {anchor} (on the way to {p}) is not a folder")
             o.create, o.anchor = True, anchor
+
+    def _check_folder_inputs(self, o: _Output) -> None:
+        """Frame folder ``o`` is no input, and none of its own files (an earlier run's, replaced
+        at commit) is one."""
+        p = o.path
+        for what, i in self.inputs:
+            if same_file(p, i):
+                raise ValueError(f"{o.option}: {p} is the input {what}; choose another output folder")
+        if p.is_dir():
+            for name in self._own_files(o):
+                self._check_input_clash(o, p / name)
 
     def _check_batch_final(self, o: _Output) -> None:
         """Under ``ibr batch`` the command writes into a staging folder (:mod:`ibr.sequence.jobs`):
@@ -333,12 +340,7 @@ class OutputPlan:
             return
         final = Path(final)
         if o.folder:
-            for what, i in self.inputs:
-                if same_file(final, i):
-                    raise ValueError(f"{o.option}: {final} is the input {what}; choose another output folder")
-            if final.is_dir():
-                for name in self._own_files(replace(o, path=final)):
-                    self._check_input_clash(replace(o, path=final), final / name)
+            self._check_folder_inputs(replace(o, path=final))
         else:
             if final.is_dir():
                 raise IsADirectoryError(f"{o.option}: {final} is a folder, expected a file name")

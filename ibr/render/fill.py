@@ -302,6 +302,7 @@ def _directional_fill(color, depth, holes, axis, mix):
     direct = color.copy()  # the source dtype: uint8 filters fastest, values are copies
     _axis_fill(color, depth, holes, axis, direct, direct_ok, direct_z)
     lack = holes & ~direct_ok
+    unreached = None  # hole pixels whose whole row and column are holes (a corner out of view)
     if lack.any():  # whole lines of holes along the axis (a strip at the border): the other axis
         other, other_ok, other_z = color.copy(), np.zeros((h, w), np.bool_), np.full((h, w), np.inf, np.float32)
         _axis_fill(color, depth, holes, 1 - axis, other, other_ok, other_z)
@@ -309,15 +310,15 @@ def _directional_fill(color, depth, holes, axis, mix):
         direct[take] = other[take]
         direct_z[take] = other_z[take]
         direct_ok |= take
+        unreached = lack & ~other_ok
     # ... smoothed across the axis (binomial, sigma 1.4 px), so that neighbouring rows copied from
     # different pixels do not show as streaks; outside the holes it reads the image
     one = np.ones(1, np.float32)
     kx, ky = (_ACROSS, one) if axis == 1 else (one, _ACROSS)
-    unreached = holes & ~direct_ok  # whole row and column are holes (a corner out of view)
-    if direct.dtype not in _FILTER_DTYPES or unreached.any():
+    if direct.dtype not in _FILTER_DTYPES or (unreached is not None and unreached.any()):
         # normalized: the unreached pixels hold whatever the caller left in the holes, never
         # read (float32: also the dtypes OpenCV cannot filter)
-        known = (~unreached).astype(np.float32)
+        known = np.ones((h, w), np.float32) if unreached is None else (~unreached).astype(np.float32)
         direct = direct.astype(np.float32) * known[..., None]
         sums = cv2.sepFilter2D(direct, -1, kx, ky, borderType=cv2.BORDER_REPLICATE).reshape(h, w, nc)
         wts = cv2.sepFilter2D(known, -1, kx, ky, borderType=cv2.BORDER_REPLICATE)
@@ -365,13 +366,10 @@ def fill_background_rows(color, depth, coverage) -> tuple[np.ndarray, np.ndarray
     hidden area most likely continues); runs at the image border take their only neighbour.
     Returns copies ``(color float32 (H, W, C), depth float32, holes bool)``.
     """
-    col = check_image("color", color)
-    col = np.ascontiguousarray((col[..., None] if col.ndim == 2 else col).astype(np.float32, copy=True))
-    d = check_array("depth", depth, shape=col.shape[:2], dtype_kind="f").astype(np.float32, copy=True)
-    cov = check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b")
-    d[~cov] = np.nan
+    col, d, cov = _row_fill_inputs(color, depth, coverage)
+    col = col.astype(np.float32, copy=False)
     holes = np.zeros(cov.shape, np.bool_)
-    run_bands(_k.fill_rows_background, col.shape[0], col, d, np.ascontiguousarray(cov), holes)
+    run_bands(_k.fill_rows_background, col.shape[0], col, d, cov, holes)
     return col, d, holes
 
 
@@ -398,12 +396,19 @@ def fill_horizontal_parallax(color, depth, coverage) -> tuple[np.ndarray, np.nda
         Copies; ``holes`` is ``~coverage``. Rows without any covered pixel are not filled
         (colour as given, depth NaN).
     """
+    col, d, cov = _row_fill_inputs(color, depth, coverage)
+    return col, d, _fill_horizontal_parallax_inplace(col, d, cov)
+
+
+def _row_fill_inputs(color, depth, coverage):
+    """Checked copies for the row fills: colour (H, W, C) C-contiguous in its dtype, float32
+    depth with NaN where not covered, C-contiguous coverage."""
     col = check_image("color", color)
     col = np.ascontiguousarray(col[..., None] if col.ndim == 2 else col).copy()
     d = check_array("depth", depth, shape=col.shape[:2], dtype_kind="f").astype(np.float32, copy=True)
-    cov = check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b")
+    cov = np.ascontiguousarray(check_array("coverage", coverage, shape=col.shape[:2], dtype_kind="b"))
     d[~cov] = np.nan
-    return col, d, _fill_horizontal_parallax_inplace(col, d, np.ascontiguousarray(cov))
+    return col, d, cov
 
 
 def _fill_horizontal_parallax_inplace(color, depth, coverage) -> np.ndarray:
