@@ -90,12 +90,10 @@ def run(args) -> int:
     import numpy as np
 
     import panorama
-    from commands.interpolate import _to_float
     from ibr.io import read_image, write_image
     from ibr.io.outputs import IMAGE_EXTS, JSON_EXTS, OutputPlan
     from commands._common import face_file_patterns, image_for
     from panorama.files import write_cubemap
-    from panorama.viewer import to_uint8
 
     out = Path(args.output)
     with OutputPlan("ibr stitch-photos", log=info) as plan:
@@ -127,16 +125,12 @@ def run(args) -> int:
             exposure=args.exposure, exposure_reference=args.keep_exposure_of, seam=args.seam,
             bands=args.bands, fill=args.fill, progress=progress)
         print(result.report.table(), flush=True)
-        pano = result.image
-        if out.suffix.lower() in (".jpg", ".jpeg") or (out.suffix.lower() == ".png" and pano.dtype.kind == "f"):
-            pano = to_uint8(pano)
-        elif out.suffix.lower() == ".exr" and pano.dtype.kind in "ui":  # EXR stores floats: [0, 1] units
-            pano = _to_float(pano)
-        write_image(plan.stage(target), image_for(out, pano))
+        pano = image_for(out, result.image)  # the dtype the format stores (EXR: float [0, 1] units)
+        write_image(plan.stage(target), pano)
         if cube is not None:
             size = args.face_size or int(np.ceil(pano.shape[1] / np.pi))
             faces = panorama.equirect_to_cubemap(pano, size, layout="list")
-            write_cubemap(plan.stage(cube), [image_for(out, f) for f in faces], layout="files", ext=out.suffix.lower())
+            write_cubemap(plan.stage(cube), faces, layout="files", ext=out.suffix.lower())
         if cov is not None:
             write_image(plan.stage(cov), np.where(result.coverage, 255, 0).astype(np.uint8))
         if rep is not None:

@@ -273,9 +273,7 @@ def run(args) -> int:
         else:  # an ODS pair: each eye's view, shown as anaglyph or side by side
             view = _show_pair(to_uint8(panorama.perspective(eyes[0], **kw)),
                               to_uint8(panorama.perspective(eyes[1], **kw)), args.stereo_out)
-        if out.suffix.lower() in (".jpg", ".jpeg") or (out.suffix.lower() == ".png" and view.dtype.kind == "f"):
-            view = to_uint8(view)
-        write_image(plan.stage(image), image_for(image, view))
+        write_image(plan.stage(image), image_for(image, view))  # uint8 for .png / .jpg, float for .exr
         plan.commit()
     info(f"view: yaw {args.yaw:g} pitch {args.pitch:g} roll {args.roll:g} fov {args.fov:g} -> {out}")
     return 0

@@ -220,8 +220,7 @@ def _pow2_face_size(width: int, smallest: int, largest: int) -> int:
 
 def _faces(pano, layout, face_size):
     """Six uint8 faces (px, nx, py, ny, pz, nz) of an equirect image or a cubemap."""
-    if layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
-                                and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
+    if _is_equirect(pano, layout):
         if face_size is None:  # a power of two (mipmaps on WebGL1 too), >= width / pi, <= 2048
             face_size = _pow2_face_size(pano.shape[1], 8, 2048)
         faces = (equirect_to_cubemap(pano, face_size, layout="list") if 6 * face_size <= MAX_IMAGE_SIDE
@@ -232,17 +231,22 @@ def _faces(pano, layout, face_size):
         faces = unpack_faces(pano, layout or detect_layout(pano))
         s = faces[0].shape[0]
         if face_size is None:  # as for an equirect: a power of two (WebGL1 mipmaps), >= the faces', <= 2048
-            face_size = _pow2_face_size(_equirect_width(pano, layout), 8, 2048)
+            face_size = _pow2_face_size(int(np.floor(np.pi * s)), 8, 2048)
         if s != face_size:  # (face_size was ignored here: 600-px faces stayed 600, 4100-px ones passed the limit)
             interp = cv2.INTER_AREA if face_size < s else cv2.INTER_LINEAR
             faces = [cv2.resize(np.ascontiguousarray(f), (face_size, face_size), interpolation=interp) for f in faces]
     return [to_uint8(np.ascontiguousarray(f)) for f in faces]
 
 
+def _is_equirect(pano, layout) -> bool:
+    """Whether ``pano`` is an equirect image: so declared, or undeclared and 2:1."""
+    return layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
+                                    and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0])
+
+
 def _equirect_width(pano, layout) -> int:
     """The width of an equirect ``pano``, or of the equirect matching a cubemap's faces (pi S)."""
-    if layout == "equirect" or (layout is None and isinstance(pano, np.ndarray)
-                                and pano.ndim >= 2 and pano.shape[1] == 2 * pano.shape[0]):
+    if _is_equirect(pano, layout):
         return int(pano.shape[1])
     from .convert import detect_layout
     s = unpack_faces(pano, layout or detect_layout(pano))[0].shape[0]

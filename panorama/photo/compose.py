@@ -284,7 +284,7 @@ def check_photo_index(name: str, value, n: int) -> None:
         raise ValueError(f"{name}: expected a photo index 0..{n - 1}, got {value!r}")
 
 
-def _check_fill(fill, dtype: np.dtype, shape) -> None:
+def check_fill(fill, dtype: np.dtype) -> None:
     """``fill``: a finite value (or one per channel) the output dtype holds (``--fill 300`` for
     uint8 photos was an OverflowError after the work)."""
     f = np.asarray(fill, dtype=np.float64) if not isinstance(fill, (bool, str)) else np.array(np.nan)
@@ -352,7 +352,7 @@ def compose_equirect(images, cameras, width: int, *, masks=None, exposure: str =
     out_dtype = np.dtype(np.asarray(images[0]).dtype)
     if out_dtype.kind == "f":
         out_dtype = np.dtype(np.float32)
-    _check_fill(fill, out_dtype, np.asarray(images[0]).shape)
+    check_fill(fill, out_dtype)
     floats, user_masks = [], []
     for k, (img, cam) in enumerate(zip(images, cameras)):
         if not isinstance(cam, Camera):

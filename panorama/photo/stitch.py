@@ -22,7 +22,7 @@ import numpy as np
 from ibr.base.camera import Camera
 from ibr.base.validate import check_choice, check_image
 
-from .compose import EXPOSURES, SEAMS, _check_fill, check_photo_index, compose_equirect
+from .compose import EXPOSURES, SEAMS, check_fill, check_photo_index, compose_equirect
 from .estimate import estimate_rotations, yaw_pitch_roll
 from .features import (DETECTORS, KEYPOINT_BIAS, detect, duplicates, match, pair_data, registration_images,
                        rotation_misfit)
@@ -220,7 +220,7 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
         raise ValueError(f"width: expected an even integer >= 4, got {width!r}")
     images, names, focal_px = _check_inputs(images, names, masks, focal_px)
     dtype = np.dtype(images[0].dtype)
-    _check_fill(fill, np.dtype(np.float32) if dtype.kind == "f" else dtype, images[0].shape)  # before the work
+    check_fill(fill, np.dtype(np.float32) if dtype.kind == "f" else dtype)  # before the work
     n = len(images)
     for arg, value in (("reference", reference), ("exposure_reference", exposure_reference)):
         check_photo_index(arg, value, n)
@@ -230,9 +230,9 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
     t0 = time.perf_counter()
     gray, scales = registration_images(images, registration_megapix)
     # where features may lie: ``masks``, else a photo's 4th channel (alpha > 0), as for compositing
-    feature_masks = [(masks[k] if masks is not None else None) for k in range(n)]
-    feature_masks = [m if m is not None or not (img.ndim == 3 and img.shape[2] == 4) else img[..., 3]
-                     for m, img in zip(feature_masks, images)]
+    feature_masks = [masks[k] if masks is not None and masks[k] is not None
+                     else (img[..., 3] if img.ndim == 3 and img.shape[2] == 4 else None)
+                     for k, img in enumerate(images)]
     reg_masks = None
     if any(m is not None for m in feature_masks):
         import cv2
