@@ -235,12 +235,10 @@ class OutputPlan:
             return p
         if not isinstance(doc, dict):
             return p
-        refs = [("'color'", doc.get("color"))]
-        if isinstance(doc.get("depth"), dict):
-            refs.append(("'depth.path'", doc["depth"].get("path")))
-        for key, rel in refs:
-            if isinstance(rel, str) and rel:
-                self.add_input(f"{what} {key}", p.parent / rel)
+        from .view_files import named_files
+
+        for key, file in named_files(p, doc):
+            self.add_input(f"{what} {key}", file)
         return p
 
     def add_file(self, option: str, path, exts: Iterable[str] | None = None) -> Path | None:

@@ -199,6 +199,16 @@ def _read_stored_depth(path: Path, encoding: str, p: dict, where: str,
             raw.dtype.kind in "ui")
 
 
+def named_files(path, doc) -> list[tuple[str, Path]]:
+    """The image files a view file's document ``doc`` names, as (key, path) pairs: ``'color'``
+    and ``'depth.path'``, relative to the view file ``path``. Only peeks: entries that are not
+    non-empty strings are skipped (:func:`load_view` reports them)."""
+    refs = [("'color'", doc.get("color"))]
+    if isinstance(doc.get("depth"), dict):
+        refs.append(("'depth.path'", doc["depth"].get("path")))
+    return [(key, Path(path).parent / rel) for key, rel in refs if isinstance(rel, str) and rel]
+
+
 def _json_number(x: float):
     return "inf" if isinstance(x, float) and math.isinf(x) else x
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from ...base.camera import Camera
 from ..images import atomic_path, read_image
-from ..view_files import load_view, read_json
+from ..view_files import load_view, named_files, read_json
 from .common import SEQUENCE_FORMAT, Frame, ImportReport, check_foreign_keys
 from .conventions import gl_from_ours, ours_from_gl
 
@@ -193,8 +193,7 @@ def write_transforms(view_paths, out, *, base=None) -> list[str]:
     for vp in _expand(view_paths):
         view = load_view(vp)
         doc = json.loads(vp.read_text())
-        inputs |= {vp.resolve()} | {(vp.parent / doc[k]["path"] if isinstance(doc[k], dict) else vp.parent / doc[k]).resolve()
-                                     for k in ("color", "depth") if doc.get(k)}
+        inputs |= {vp.resolve()} | {f.resolve() for _, f in named_files(vp, doc)}
         cam = view.camera
         cams.append(cam)
         fr = {"file_path": os.path.relpath(vp.parent / doc["color"], base),
