@@ -287,7 +287,6 @@ def _check_not_inputs(job: Job, finals, inputs) -> None:
                              f"({os.path.relpath(hit, job.cwd)}); refusing to overwrite it")
 
 
-
 def check_batch_files(jobs, jobs_path, records, report) -> None:
     """Refuse (ValueError, before any job runs) a batch ``report`` file or a job record
     (``records/<id>.json``) that would replace the batch file itself or an input or output of a
