@@ -163,7 +163,19 @@ def note_first_run(*modules: str, warm: str = "frame") -> bool:
     also start compiling the kernels ``warm`` names ("frame": the plane fit, the rasterizer and the
     hole fill's pull-push; "stitch": the ray rasterizer's setup and the blend; "mesh": the
     segmentation's plane tests and plane fit) in a second process (:mod:`ibr.render.warmup`).
-    Returns whether this is such a first run."""
+    Returns whether this is such a first run. A second call with the same arguments returns the
+    first call's answer without saying it again (the CLI calls it before the command's imports,
+    :func:`cli.main`, and the command calls it again for callers of its ``run``)."""
+    key = (modules, warm)
+    if key not in _FIRST_RUN_NOTED:
+        _FIRST_RUN_NOTED[key] = _note_first_run(modules, warm)
+    return _FIRST_RUN_NOTED[key]
+
+
+_FIRST_RUN_NOTED: dict = {}  # (modules, warm) -> note_first_run's answer in this process
+
+
+def _note_first_run(modules, warm: str) -> bool:
     import importlib.util
     import os
 

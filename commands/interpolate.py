@@ -195,6 +195,12 @@ def write_video(path, frames, fps: float) -> None:
 FRAME_PATTERNS = tuple(f"frame_#_t{sign}#.#{tail}" for sign in ("", "-") for tail in (".png", "_holes.png", ".exr"))
 
 
+def first_run_kernels(args):
+    """The kernel modules this run compiles and the first-run helper's kind (:func:`cli.main`
+    starts the helper with them before the command's imports, #13)."""
+    return ("ibr.mesh._segment_kernels", "ibr.render._composite_kernels"), "frame"
+
+
 def run(args) -> int:
     import time
     from pathlib import Path
@@ -247,7 +253,8 @@ def run(args) -> int:
         video = plan.add_file("--video", args.video, VIDEO_EXTS)
         sheet = plan.add_file("--contact-sheet", args.contact_sheet, (".png", ".jpg", ".jpeg", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
-        note_first_run("ibr.mesh._segment_kernels", "ibr.render._composite_kernels")
+        modules, warm = first_run_kernels(args)
+        note_first_run(*modules, warm=warm)
         # imported after the first-run helper has started: numba's import (0.3 s) then overlaps it
         from ibr.render.view_synthesis import iter_interpolate, source_mesh
 

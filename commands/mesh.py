@@ -34,6 +34,12 @@ def add_arguments(parser) -> None:
                         help="upscale the segmentation picture N times (1..64, default 1)")
 
 
+def first_run_kernels(args):
+    """The kernel modules this run compiles and the first-run helper's kind (:func:`cli.main`
+    starts the helper with them before the command's imports)."""
+    return ("ibr.mesh._segment_kernels",), "mesh"
+
+
 def run(args) -> int:
     import os
     import time
@@ -59,7 +65,8 @@ def run(args) -> int:
         if obj:
             mtl = plan.add_file("--obj (its material file)", obj.with_suffix(".mtl"), (".mtl",))
         plan.check()  # every output checked before any work (#12)
-        note_first_run("ibr.mesh._segment_kernels", warm="mesh")
+        modules, warm = first_run_kernels(args)
+        note_first_run(*modules, warm=warm)
         from ibr.mesh.quad_mesh import build_mesh  # after the helper's start (numba: 0.3 s)
 
         view = load_view(args.view)

@@ -146,6 +146,12 @@ def _describe(args, n, seen, panorama) -> str:
             f"seen {seen:.2%} of the sphere (holes {1 - seen:.2%}{', filled' if args.fill != 'none' else ''})")
 
 
+def first_run_kernels(args):
+    """The kernel modules this run compiles and the first-run helper's kind (:func:`cli.main`
+    starts the helper with them before the command's imports)."""
+    return ("ibr.mesh._segment_kernels", "ibr.render._ray_kernels"), "stitch"
+
+
 def _run_sequences(args) -> int:
     """One rig camera per sequence: frame k stitches view k of every sequence into -o FOLDER."""
     from commands._common import info, note_first_run, progress
@@ -169,7 +175,8 @@ def _run_sequences(args) -> int:
                 plan.add_view_input("VIEW", v)
         folder = plan.add_folder("-o", args.output, ("pano_#.png",) + (("pano_#_depth.exr",) if depth else ()))
         plan.check()
-        note_first_run("ibr.mesh._segment_kernels", "ibr.render._ray_kernels", warm="stitch")
+        modules, warm = first_run_kernels(args)
+        note_first_run(*modules, warm=warm)
         for k in progress(range(frames), frames, "stitch frames"):
             views = [load_view(s.views[k]) for s in seqs]
             packed, z, holes, seen = _stitch_frame(args, views, None, None)
@@ -206,7 +213,8 @@ def run(args) -> int:
                                                               tuple(e for e in DEPTH_EXTS if e != ".png"))
         holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
         plan.check()  # every output checked before any work
-        note_first_run("ibr.mesh._segment_kernels", "ibr.render._ray_kernels", warm="stitch")
+        modules, warm = first_run_kernels(args)
+        note_first_run(*modules, warm=warm)
 
         if args.panorama:
             panorama = (read_image(args.panorama[0], what="--panorama COLOR"),

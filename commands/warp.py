@@ -51,6 +51,14 @@ def load_camera(path):
     return _load_camera(path, what="--to")
 
 
+def first_run_kernels(args):
+    """The kernel modules this run compiles and the first-run helper's kind (None: the forward
+    splat, no helper); :func:`cli.main` starts the helper with them before the command's imports."""
+    if args.method != "mesh":
+        return None
+    return ("ibr.mesh._segment_kernels", "ibr.render._composite_kernels"), "frame"  # interpolate's
+
+
 def run(args) -> int:
     import time
     from pathlib import Path
@@ -71,8 +79,9 @@ def run(args) -> int:
         depth_out = plan.add_file("--depth-out", args.depth_out, (".exr", ".tif", ".tiff", ".pfm"))
         holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
-        if args.method == "mesh":  # the interpolation's kernels: the helper compiles raster and fill
-            note_first_run("ibr.mesh._segment_kernels", "ibr.render._composite_kernels")
+        if first_run_kernels(args) is not None:  # the helper compiles raster and fill
+            modules, warm = first_run_kernels(args)
+            note_first_run(*modules, warm=warm)
         from ibr.render.view_synthesis import source_mesh, warp  # after the helper's start (numba: 0.3 s)
 
         view = load_view(args.view)

@@ -204,3 +204,29 @@ def test_a_forked_child_leaves_the_helper_and_its_marks_alone(tmp_path, monkeypa
             os.waitpid(pid, 0)
         helper.kill()
         helper.wait()
+
+
+def test_the_cli_starts_the_helper_before_the_command_runs(monkeypatch):
+    """cli.main asks for the first-run helper with the command's kernels before the command's
+    own imports and checks (#13: 0.25 s earlier on the first run's critical path): the kernels of
+    `ibr interpolate` and of a mesh `ibr warp`, none for a forward-splat warp; the command's own
+    later call returns the same answer without saying it twice."""
+    import cli
+    import commands._common as common
+    import commands.interpolate as interpolate
+    import commands.warp as warp
+
+    calls, order = [], []
+    monkeypatch.setattr(common, "_note_first_run", lambda modules, warm: calls.append((modules, warm)) or True)
+    monkeypatch.setattr(common, "_FIRST_RUN_NOTED", {})
+    monkeypatch.setattr(interpolate, "run", lambda args: order.append(("run", len(calls))) or 0)
+    monkeypatch.setattr(warp, "run", lambda args: order.append(("run", len(calls))) or 0)
+    assert cli.main(["interpolate", "--out", "nowhere"]) == 0
+    assert calls == [(("ibr.mesh._segment_kernels", "ibr.render._composite_kernels"), "frame")]
+    assert order == [("run", 1)]  # asked before the command ran
+    assert common.note_first_run("ibr.mesh._segment_kernels", "ibr.render._composite_kernels") is True
+    assert len(calls) == 1  # the command's own call: answered from the first, not said again
+    assert cli.main(["warp", "a.json", "--to", "b.json", "-o", "x.png", "--method", "forward"]) == 0
+    assert len(calls) == 1 and order[-1] == ("run", 1)
+    assert cli.main(["warp", "a.json", "--to", "b.json", "-o", "x.png"]) == 0
+    assert order[-1] == ("run", 1)  # the same kernels as interpolate's: the helper is asked once per process
