@@ -161,7 +161,8 @@ def note_first_run(*modules: str, warm: str = "frame") -> bool:
     """Say before a long first run that numba is compiling (once): when none of ``modules``
     (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet; then
     also start compiling the kernels ``warm`` names ("frame": the plane fit, the rasterizer and the
-    hole fill's pull-push; "stitch": the ray rasterizer's setup and the blend; "mesh": the
+    hole fill's pull-push; "stitch" / "stitch-ods": the ray rasterizer's setup, the plane fit,
+    the blend's accumulation and the panorama's hole fill; "mesh": the
     segmentation's plane tests and plane fit) in a second process (:mod:`ibr.render.warmup`).
     Returns whether this is such a first run. A second call with the same arguments returns the
     first call's answer without saying it again (the CLI calls it before the command's imports,

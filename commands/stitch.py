@@ -149,7 +149,7 @@ def _describe(args, n, seen, panorama) -> str:
 def first_run_kernels(args):
     """The kernel modules this run compiles and the first-run helper's kind (:func:`cli.main`
     starts the helper with them before the command's imports)."""
-    return ("ibr.mesh._segment_kernels", "ibr.render._ray_kernels"), "stitch"
+    return ("ibr.mesh._segment_kernels", "ibr.render._ray_kernels"), "stitch-ods" if args.stereo == "ods" else "stitch"
 
 
 def _run_sequences(args) -> int:

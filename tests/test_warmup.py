@@ -59,26 +59,40 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
 
 def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):
     """``python -m ibr.render.warmup stitch`` writes the cache entries of the ray rasterizer's
-    setup and of the blend, but not of the ray raster kernel (the main process's share, reached
-    after its segmentation); stitching two bundled rig views afterwards compiles the segmentation
-    and that kernel only."""
+    setup, the plane fit, the blend's accumulation and the mono panorama's hole fill, but not of
+    the ray raster kernel and the blend's resolve (the main process's share); a real mono stitch
+    with the fill afterwards compiles the segmentation and those two only. ``stitch-ods`` caches
+    the ODS eyes' row fill instead of the mono fill."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
     marks = tmp_path / "marks"
     marks.mkdir()
     subprocess.run([sys.executable, "-m", "ibr.render.warmup", "stitch", str(marks)], env=env, check=True, timeout=300)
-    assert sorted(p.name for p in marks.iterdir()) == ["blend", "ray-setup"]
+    assert sorted(p.name for p in marks.iterdir()) == ["background-fill", "blend", "plane-fit", "ray-setup"]
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_ray_kernels._setup_rays", "_ray_kernels._region", "_blend_kernels.accumulate_spherical",
-            "_blend_kernels.resolve"} <= cached
-    assert "_ray_kernels._raster_rays" not in cached
+            "_segment_kernels._fit_planes_kernel", "_fill_kernels.background_fill"} <= cached
+    assert not {"_ray_kernels._raster_rays", "_blend_kernels.resolve", "_fill_kernels.fill_rows_background"} & cached
     compiled = _kernels_compiled_by(
         "from ibr.io import load_view\n"
         "from panorama.stitch import equirect_camera, stitch_rgbd\n"
+        "from panorama.stitch.fill import fill_stitched\n"
         "from samples import DATA_DIR\n"
         "views = [load_view(DATA_DIR / 'rig' / f'rig_0{i}.json') for i in (0, 1)]\n"
-        "stitch_rgbd(views, equirect_camera(256))\n", env)
-    assert [k for k in compiled if k.startswith(("_ray_kernels", "_blend_kernels"))] == ["_ray_kernels._raster_rays"]
+        "cam = equirect_camera(256)\n"
+        "fill_stitched(stitch_rgbd(views, cam))\n", env)
+    assert [k for k in compiled if k.startswith(("_ray_kernels", "_blend_kernels", "_fill_kernels"))] == [
+        "_blend_kernels.resolve", "_ray_kernels._raster_rays"]
+    assert "_segment_kernels._fit_planes_kernel" not in compiled
     assert any(k.startswith("_segment_kernels") for k in compiled)
+    ods = tmp_path / "ods"
+    ods.mkdir()
+    env["NUMBA_CACHE_DIR"] = str(tmp_path / "nb-ods")
+    subprocess.run([sys.executable, "-m", "ibr.render.warmup", "stitch-ods", str(ods)], env=env, check=True,
+                   timeout=300)
+    assert sorted(p.name for p in ods.iterdir()) == ["blend", "plane-fit", "ray-setup", "row-fill"]
+    cached = {p.name.split("-")[0] for p in (tmp_path / "nb-ods").rglob("*.nbi")}
+    assert {"_fill_kernels.fill_rows_background", "_fill_kernels.smooth_across_rows"} <= cached
+    assert "_fill_kernels.background_fill" not in cached
 
 
 def test_the_mesh_helper_fills_the_cache_a_real_mesh_uses(tmp_path):

@@ -26,7 +26,10 @@ __all__ = ["GROUPS", "MAX_WAIT_S", "await_kernels", "mark", "start_helper"]
 
 _STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
 #: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
-GROUPS = {"frame": ("plane-fit", "raster", "fill"), "stitch": ("ray-setup", "blend"), "mesh": ("segment", "plane-fit")}
+GROUPS = {"frame": ("plane-fit", "raster", "fill"),
+          "stitch": ("ray-setup", "plane-fit", "blend", "background-fill"),
+          "stitch-ods": ("ray-setup", "plane-fit", "blend", "row-fill"),
+          "mesh": ("segment", "plane-fit")}
 _ALL_GROUPS = tuple(sorted({g for groups in GROUPS.values() for g in groups}))
 _READY: set = set()  # groups this process no longer waits for
 #: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
@@ -62,9 +65,10 @@ def await_kernels(group: str) -> None:
 
 def start_helper(kind: str = "frame") -> None:
     """Start the helper process for ``kind`` (a key of :data:`GROUPS`: "frame" for the mesh's
-    plane fit, the rasterizer and the fill, "stitch" for the ray rasterizer's setup and the blend, "mesh" for the
-    segmentation's plane tests and plane fit) once per process (quietly; killed at exit if still
-    running)."""
+    plane fit, the rasterizer and the fill, "stitch" / "stitch-ods" for the ray rasterizer's setup,
+    the plane fit, the blend's accumulation and the mono / ODS panorama's hole fill, "mesh" for
+    the segmentation's plane tests and plane fit) once per process (quietly; killed at exit if
+    still running)."""
     check_choice("kind", kind, tuple(GROUPS))
     if _STARTED or os.environ.get("NUMBA_DISABLE_JIT") or os.environ.get("IBR_NO_WARMUP"):
         return

@@ -153,6 +153,7 @@ def _fill_background_inplace(color, depth, holes, *, depth_tol: float = 0.05, ma
     max_dist = np.iinfo(np.int64).max if max_dist is None else int(check_positive("max_dist", max_dist))
     filled = np.zeros(holes.shape, np.bool_)
     if holes.any():
+        await_kernels("background-fill")  # a first `ibr stitch`: the helper may be caching it right now
         _k.background_fill(color, depth, np.ascontiguousarray(holes), depth_tol, max_dist,
                            color.dtype.kind in "ui", filled)
     return filled
@@ -415,6 +416,7 @@ def _fill_horizontal_parallax_inplace(color, depth, coverage) -> np.ndarray:
     """:func:`fill_horizontal_parallax` writing into ``color`` (C-contiguous (H, W, C)) and
     ``depth`` (C-contiguous float32); returns the holes (``~coverage``)."""
     holes = np.zeros(coverage.shape, np.bool_)
+    await_kernels("row-fill")  # a first ODS `ibr stitch`: the helper may be caching the row fill right now
     run_bands(_k.fill_rows_background, color.shape[0], color, depth, coverage, holes)
     row_ok = coverage.any(axis=1)  # rows the row fill could fill (the others keep their colour)
     idx = np.flatnonzero(holes)

@@ -10,8 +10,9 @@ read-only arrays), so they land in numba's on-disk cache while the main process 
 segmentation's edge prefix and split and the compositor (the directional pass moved here from the
 main process: median first run 12.95 -> 12.70 s, three runs each on the 2-core machine);
 when the main process reaches them it loads them from the cache instead. ``python -m
-ibr.render.warmup stitch`` does the same for ``ibr stitch`` (the ray rasterizer's setup and the
-N-source blend into a spherical camera; the main process compiles the ray raster kernel itself),
+ibr.render.warmup stitch`` (``stitch-ods``) does the same for ``ibr stitch`` (the ray rasterizer's
+setup, the plane fit, the N-source blend's accumulation into a spherical camera and the mono (ODS)
+panorama's hole fill; the main process compiles the ray raster kernel and the resolve itself),
 ``... mesh`` for ``ibr mesh`` (the split's plane tests and the plane fit). Nothing
 here is needed for correctness: if the helper is slow or fails, the main process compiles what it
 needs itself.
@@ -79,15 +80,19 @@ def _tiny_mesh():
     return QuadMesh(cam, rects, planes, qop, {})
 
 
-def warm_stitch_kernels(marks: Path | None = None) -> None:
-    """The kernels ``ibr stitch`` runs after its segmentation, but one: the ray rasterizer's setup
-    (setup, bucketing, region; group "ray-setup"), then the spherical accumulation and the resolve
-    of the blend (group "blend"), on the tiny mesh and a small equirect ray camera. The ray raster
-    kernel itself is left to the main process, which reaches it when its segmentation is done
-    (compiling the whole chain here kept the main process waiting 4 s, #13): here it is skipped
-    for the setup and replaced by the numpy reference for the blend."""
+def warm_stitch_kernels(marks: Path | None = None, eye_fill: str = "any") -> None:
+    """The kernels ``ibr stitch`` runs after its segmentation, but two: the ray rasterizer's
+    setup (setup, bucketing, region; group "ray-setup"), the mesh's plane fit ("plane-fit"), the
+    blend's spherical accumulation ("blend") and the panorama's hole fill ("background-fill" for
+    a mono panorama, ``eye_fill="any"``; "row-fill" for ODS eyes, ``"rows"``), on the tiny mesh
+    and a small equirect ray camera. The ray raster kernel and the blend's resolve are left to the
+    main process, which reaches the raster when its segmentation is done and the resolve while
+    this process compiles the fill (#13: the main process compiled the fill last, 0.9 s alone on
+    one core): here they are skipped for the setup and the blend, and the rays come from the
+    numpy reference."""
     from ..base.ray_camera import SphericalCamera
-    from . import _ray_kernels, blend
+    from ..mesh import _segment_kernels as k
+    from . import _blend_kernels, _ray_kernels, blend, fill
     from .ray_raster import rasterize_mesh_rays, rasterize_mesh_rays_reference
     from .rasterize import SourceMaps
 
@@ -98,6 +103,8 @@ def warm_stitch_kernels(marks: Path | None = None) -> None:
     with _replaced(_ray_kernels, "raster_rays", _skip):
         rasterize_mesh_rays(mesh, camera, out=maps, _region=[0, -1, None])
     _mark(marks, "ray-setup")
+    k.fit_planes_inv_depth(np.ones((24, 32)), np.array([[0, 0, 32, 24]], np.int32))
+    _mark(marks, "plane-fit")
 
     def reference_rays(mesh, camera, *, footprint, out, _region):
         ref = rasterize_mesh_rays_reference(mesh, camera)
@@ -106,9 +113,20 @@ def warm_stitch_kernels(marks: Path | None = None) -> None:
         _region[:] = [0, camera.shape[0] - 1, np.ones(camera.shape[1], np.uint8)]  # the types of _k.region's
         return out
 
-    with _replaced(blend, "rasterize_mesh_rays", reference_rays):
+    with _replaced(blend, "rasterize_mesh_rays", reference_rays), _replaced(_blend_kernels, "resolve", _skip):
         blend.blend_sources([(mesh, np.full((24, 32, 3), 128, np.uint8))], camera)
     _mark(marks, "blend")
+    color = np.full((h, w, 3), 128, np.uint8)  # the stitched panorama's 8-bit colour
+    depth = np.full((h, w), 3.0, np.float32)
+    seen = np.ones((h, w), np.bool_)
+    seen[8:12, 10:20] = False
+    depth[~seen] = np.nan
+    if eye_fill == "rows":
+        fill.fill_horizontal_parallax(color, depth, seen)
+        _mark(marks, "row-fill")
+    else:
+        fill.fill_background(color, depth, ~seen)
+        _mark(marks, "background-fill")
 
 
 def warm_mesh_kernels(marks: Path | None = None) -> None:
@@ -148,4 +166,7 @@ def _replaced(module, name: str, value):
 if __name__ == "__main__":
     _kind = sys.argv[1] if len(sys.argv) > 1 else "frame"
     _marks = Path(sys.argv[2]) if len(sys.argv) > 2 else None
-    {"stitch": warm_stitch_kernels, "mesh": warm_mesh_kernels}.get(_kind, warm_frame_kernels)(_marks)
+    if _kind in ("stitch", "stitch-ods"):
+        warm_stitch_kernels(_marks, "rows" if _kind == "stitch-ods" else "any")
+    else:
+        {"mesh": warm_mesh_kernels}.get(_kind, warm_frame_kernels)(_marks)
