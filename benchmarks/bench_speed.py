@@ -57,6 +57,8 @@ FIRST_RUN_COMMANDS = {
     "view": ["view", "samples/data/rig/capture_pano_color.png", "-o", "out/v.png", "--yaw", "30"],
     "stitch": ["stitch", *[f"samples/data/rig/rig_{i:02d}.json" for i in range(10)], "-o", "out/pano.png",
                "--width", "1024"],
+    "stitch-ods": ["stitch", *[f"samples/data/rig/rig_{i:02d}.json" for i in range(10)], "-o", "out/ods.png",
+                   "--width", "1024", "--stereo", "ods"],
 }
 
 
