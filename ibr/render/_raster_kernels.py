@@ -229,7 +229,7 @@ def _bucket(bbox, rows_per_band, count, fill, quads):
 
 
 def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_start, band_quads, far_coord,
-                  depth, map_u, map_v, coverage):
+                  crack_rel, depth, map_u, map_v, coverage):
     """Z-buffered rasterization of quads into source-coordinate maps, one band of target rows
     per parallel task (each band owns its rows: no write races).
 
@@ -238,7 +238,11 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
     coordinates of the nearest quad per target pixel (far_coord where uncovered); coverage (H, W)
     bool. clamp (Q, 4) uint8 flags [left, top, right, bottom]: when set, the sample position is
     clamped to the rect's outer pixel *centers* on that side so that bilinear sampling never
-    reads across a depth edge.
+    reads across a depth edge. crack_rel > 0 closes one-pixel cracks along rows: an uncovered
+    pixel between two covered row neighbours whose depths are within ``crack_rel`` of the nearer
+    takes their mean map coordinates and the mean of their inverse depths (two neighbouring
+    quads of a curved surface have different planes, so their shared edge can open by a pixel
+    in another view); 0 leaves them.
     """
     nbands = band_start.shape[0] - 1
     rows_per_band = (height + nbands - 1) // nbands
@@ -333,6 +337,23 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
                 crow[u] = cov
                 murow[u] = murow[u] if cov else far_coord
                 mvrow[u] = mvrow[u] if cov else far_coord
+            if crack_rel > 0.0:
+                _close_row_cracks(drow, crow, murow, mvrow, width, crack_rel)
+
+
+@njit(cache=True, error_model="numpy")
+def _close_row_cracks(drow, crow, murow, mvrow, width, rel):
+    """One-pixel cracks of one target row closed (see :func:`_raster_quads`, ``crack_rel``)."""
+    for u in range(1, width - 1):
+        if crow[u] or not (crow[u - 1] and crow[u + 1]):
+            continue
+        zl = drow[u - 1]
+        zr = drow[u + 1]
+        if abs(zl - zr) <= rel * min(zl, zr):
+            drow[u] = 2.0 / (1.0 / zl + 1.0 / zr)
+            murow[u] = 0.5 * (murow[u - 1] + murow[u + 1])
+            mvrow[u] = 0.5 * (mvrow[u - 1] + mvrow[u + 1])
+            crow[u] = True
 
 
 #: Bands ``band0 .. band1-1`` without the GIL: :func:`ibr.render.bands.run_bands` runs bands on all

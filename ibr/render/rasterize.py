@@ -189,9 +189,12 @@ def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out:
     return _rasterize_many_into([mesh], camera, footprint, depth_tol, [out])[0]
 
 
-def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: float, outs) -> list:
+def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: float, outs, crack_rel: float = 0.0) -> list:
     """:func:`_rasterize_into` for several meshes into the same camera, their bands of rows run
-    in one pass of the band pool (one dispatch, and the pieces of all meshes balance out)."""
+    in one pass of the band pool (one dispatch, and the pieces of all meshes balance out).
+    ``crack_rel`` > 0: one-pixel cracks along rows between same-surface pixels are closed
+    (``_raster_kernels.raster_quads``; view synthesis, not the exact coverage of
+    :func:`rasterize_mesh`)."""
     check_choice("footprint", footprint, FOOTPRINTS)
     depth_tol = check_positive("depth_tol", depth_tol)
     if not isinstance(camera, Camera):
@@ -211,8 +214,8 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
                   h, coef, bbox, min_rows=4096)  # quads: a piece per thread from 8192 quads on
         flags = _clamp_flags(mesh, footprint, depth_tol)
         start, order = _k.bucket_bands(bbox, h, _nbands(h))
-        jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, _FAR, out.depth,
-                                             out.map_u, out.map_v, out.coverage)))
+        jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, _FAR,
+                                             float(crack_rel), out.depth, out.map_u, out.map_v, out.coverage)))
         first += len(start) - 1
 
     def bands(b0, b1):  # bands b0 .. b1-1 of all meshes, numbered one after the other
