@@ -26,7 +26,7 @@ from ..base.camera import Camera, interpolate_cameras
 from ..base.depth import quantization_of, set_quantization
 from .composite import (COMPOSITE_MODES, Composite, composite, mixed_pixels, pack_trust, remap_composite,
                         rgbt_source, rim_beside_holes, sample_composite, source_trust, viewpoint_weights)
-from .fill import FILLS, _fill_background_inplace, _fill_pullpush_inplace, parallax_axis
+from .fill import FILLS, _fill_background_inplace, _fill_previous_inplace, _fill_pullpush_inplace, parallax_axis
 from .supersample import check_supersample, downsample_rendering, supersampled_camera
 from .rasterize import (FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_many_into, as_float_color, sample_maps, scratch,
                         scratch_maps)
@@ -366,11 +366,8 @@ def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
     if holes.any() or replace is not None:
         # seed step 7 (only hole pixels change); a previous frame of another size cannot serve
         if fill == "previous" and previous is not None and previous.depth.shape == holes.shape:
-            color[holes] = previous.color.reshape(color.shape)[holes]
-            depth[holes] = previous.depth[holes]
-            filled = holes.copy()
-            if replace is not None:  # not from the previous frame: it holds other content there
-                filled |= _fill_pullpush_inplace(color, depth, replace, axis=axis)
+            filled = _fill_previous_inplace(color, depth, holes, replace, previous.color.reshape(color.shape),
+                                            previous.depth, axis=axis)
         elif fill in ("previous", "inpaint"):  # streak-free background pull-push
             filled = _fill_pullpush_inplace(color, depth, holes if replace is None else holes | replace, axis=axis)
         elif fill == "background":  # the directional fill of issue 4 (rows and columns)

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..base.validate import check_choice
 from ..base.view import View
-from ..render.fill import FILLS, fill_previous
+from ..render.fill import FILLS, _fill_previous_inplace, parallax_axis
 from ..render.supersample import check_supersample
 from ..render.view_synthesis import Rendering, iter_interpolate
 
@@ -104,14 +104,17 @@ def _key_rendering(view: View) -> Rendering:
     return Rendering(view.color, z, none, none, view.camera, 0.0)
 
 
-def _previous_fill(r: Rendering, previous: Rendering) -> Rendering:
-    """Seed 002 step 7 over the sequence: hole pixels take the previous output frame."""
+def _previous_fill(r: Rendering, previous: Rendering, axis: int) -> Rendering:
+    """Seed 002 step 7 over the sequence: hole pixels take the previous output frame where it
+    showed background there, the background pull-push along ``axis`` elsewhere
+    (:data:`ibr.render.fill.PREVIOUS_MIN_DEPTH`)."""
     if not r.holes.any():
         return r
     two_d = r.color.ndim == 2
-    c = r.color[..., None] if two_d else r.color
+    color = np.ascontiguousarray(r.color[..., None] if two_d else r.color).copy()
+    depth = np.ascontiguousarray(r.depth, np.float32).copy()
     pc = previous.color[..., None] if previous.color.ndim == 2 else previous.color
-    color, depth, filled = fill_previous(c, r.depth, r.holes, pc, previous.depth)
+    filled = _fill_previous_inplace(color, depth, r.holes, None, pc, previous.depth, axis=axis)
     return Rendering(color[..., 0] if two_d else color, depth, r.holes, filled, r.camera, r.t)
 
 
@@ -174,7 +177,7 @@ def upconvert(
         nonlocal previous, index
         for r in iter_interpolate(va, vb, list(ts), **opts):
             if fill == "previous":
-                r = _previous_fill(r, previous)
+                r = _previous_fill(r, previous, parallax_axis(r.camera, [va.camera, vb.camera]))
             previous = r
             index += 1
             yield SequenceFrame(index, seg, float(r.t), False, r)
