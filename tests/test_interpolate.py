@@ -379,3 +379,22 @@ def test_the_previous_frame_fills_only_where_it_showed_background():
     assert (seq[2].depth[gap][wall] > 3.0).all()  # the sphere: 1.6; the card beside the gap: 3.4
     assert psnr(seq[2].color, g.color) > psnr(single[2].color, g.color) - 0.2
     assert seq[2].filled[seq[2].holes].all()  # every hole pixel still filled
+
+
+@pytest.mark.parametrize("first_run", [True, False])
+def test_the_summary_says_numba_compiled_only_on_a_first_run(tmp_path, monkeypatch, capsys, first_run):
+    """`ibr interpolate` says the first frame included numba's one-time compilation only when the
+    kernels' cache was empty (the first-run check's answer); a warm first frame is slower only
+    by loading the cached kernels, and the typical frame time is the median of the others."""
+    import commands._common as common
+
+    monkeypatch.setattr(common, "_FIRST_RUN_NOTED", {})
+    monkeypatch.setattr(common, "_note_first_run", lambda modules, warm: first_run)
+    assert cli.main(["interpolate", "--out", str(tmp_path / "out"), "--t", "0.25", "0.5", "0.75"]) == 0
+    err = capsys.readouterr().err
+    summary = [line for line in err.splitlines() if line.startswith("wrote 3 frames")]
+    assert len(summary) == 1
+    assert ("one-time numba compilation" in summary[0]) == first_run
+    times = [float(line.split(":", 1)[1].split("ms")[0]) for line in err.splitlines() if line.startswith("frame ")]
+    per = float(summary[0].split("(median ")[1].split(" ms")[0])
+    assert per == pytest.approx(float(np.median(times[1:])), abs=0.06)
