@@ -264,10 +264,15 @@ def run_interpolate(args) -> int:
                  f"{np.mean([row['holes'] for row in inner]):.3%} of pixels before filling")
         basis = "ground truth unchanged" if truth is not None else "static by depth and camera motion (< 0.5 px)"
         floor = summarize_flicker(truth_changes, shares).mean if truth_changes else None
-        info(f"interpolate: flicker {fl.mean * 255:.4f} 8-bit levels (mean |change| between consecutive frames "
-             f"over static pixels: {basis}; {fl.static_fraction:.1%} of pixels"
-             + (f"; the exact frames: {floor * 255:.4f}" if floor is not None else "") + "); "
-             f"in static hole pixels {fl_holes.mean * 255:.3f} ({fl_holes.static_fraction:.4%} of pixels)")
+        if not np.isfinite(fl.mean):  # e.g. --factor 1 (keys only, they moved): nothing stayed still
+            info(f"interpolate: flicker not measured (no pixel static between consecutive frames: {basis})")
+        else:
+            info(f"interpolate: flicker {fl.mean * 255:.4f} 8-bit levels (mean |change| between consecutive "
+                 f"frames over static pixels: {basis}; {fl.static_fraction:.1%} of pixels"
+                 + (f"; the exact frames: {floor * 255:.4f}" if floor is not None and np.isfinite(floor) else "")
+                 + "); "
+                 + (f"in static hole pixels {fl_holes.mean * 255:.3f} ({fl_holes.static_fraction:.4%} of pixels)"
+                    if np.isfinite(fl_holes.mean) else "no static pixel was a hole"))
         summary = {"frames": len(rows), "keys": len(seq), "factor": factor, "fill": args.fill,
                    "flicker": fl.mean, "flicker_8bit": fl.mean * 255, "static_fraction": fl.static_fraction,
                    "flicker_holes_8bit": fl_holes.mean * 255, "hole_static_fraction": fl_holes.static_fraction,

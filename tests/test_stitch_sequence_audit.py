@@ -99,7 +99,10 @@ def test_interpolate_report_is_strict_json_with_factor_1(manifest, tmp_path, cap
     s = doc["summary"]
     assert s["frames"] == 2 and s["median_ms"] is None and s["flicker_holes_8bit"] is None
     assert [row["key"] for row in doc["frames"]] == [True, True]
-    assert "nan%" not in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "nan%" not in err
+    # keys that moved: no static pixel to measure flicker on, said in words, not "flicker nan"
+    assert "flicker not measured" in err and "nan" not in err
 
 
 # --------------------------------------------------------------------------- flicker and PSNR
@@ -275,3 +278,14 @@ def test_stitch_int_camera_names_camera(width):
 
     with pytest.raises(ValueError, match=r"^camera: an int is the width of a mono equirect, even and >= 2"):
         stitch_rgbd([_view(0)], width)  # was named 'width' (of equirect_camera)
+
+
+def test_interpolate_sequence_without_static_holes_says_so(tmp_path, capsys):
+    """A sequence whose static pixels never were holes printed "in static hole pixels nan"; the
+    summary says it in words (no ground truth: static pixels from depth and camera motion)."""
+    seq = save_sequence([_view(0), _view(1, x=0.001)], tmp_path / "still.json", fps=10)
+    assert _cli("interpolate", seq, "--factor", 2, "--out", tmp_path / "f") == 0
+    err = capsys.readouterr().err
+    line = [x for x in err.splitlines() if "interpolate: flicker" in x]
+    assert len(line) == 1 and "nan" not in line[0]
+    assert "no static pixel was a hole" in line[0] or "in static hole pixels" in line[0]
