@@ -19,7 +19,7 @@ def add_arguments(parser) -> None:
                         help="two view files A and B (default: the bundled sample pair)")
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--frames", type=frame_count, metavar="N",
-                       help="N frames evenly spaced from A to B, both included (t = i / (N - 1))")
+                       help="N frames evenly spaced from A to B, both included (t = i / (N - 1); N = 1: t = 0.5)")
     where.add_argument("--t", type=finite_float, nargs="+", metavar="T",
                        help="interpolation parameters (0 = A, 1 = B; default 0.25 0.5 0.75)")
     parser.add_argument("--scene", default=None, metavar="NAME",

@@ -29,13 +29,13 @@ def add_arguments(parser) -> None:
     parser.add_argument("--layout", default=None, choices=PANO_LAYOUTS, metavar="LAYOUT",
                         help=f"layout of PANO: {', '.join(PANO_LAYOUTS)} (default: from its shape)")
     parser.add_argument("--yaw", type=finite_float, default=0.0,
-                        help="degrees, longitude of the view centre (0 = +z, 90 = +x, right)")
-    parser.add_argument("--pitch", type=finite_float, default=0.0, help="degrees, +90 looks straight up")
+                        help="degrees, longitude of the view centre (0 = +z, 90 = +x, right; default: %(default)s)")
+    parser.add_argument("--pitch", type=finite_float, default=0.0, help="degrees, +90 looks straight up (default: %(default)s)")
     parser.add_argument("--roll", type=finite_float, default=0.0, help="degrees, camera turned clockwise")
     parser.add_argument("--fov", type=number_in(0, 180, lo_open=True, hi_open=True, what="an angle"), default=90.0,
-                        help="horizontal field of view, degrees (0 < fov < 180)")
-    parser.add_argument("--width", type=image_side, default=1280)
-    parser.add_argument("--height", type=image_side, default=720)
+                        help="horizontal field of view, degrees (0 < fov < 180; default: %(default)s)")
+    parser.add_argument("--width", type=image_side, default=1280, help="output width in pixels (default: %(default)s)")
+    parser.add_argument("--height", type=image_side, default=720, help="output height in pixels (default: %(default)s)")
     parser.add_argument("--tour", type=frame_count, default=None, metavar="N",
                         help="write N frames turning once around (yaw from --yaw)")
     parser.add_argument("--fps", type=frame_rate, default=12.0, help="tour frame rate (GIF/mp4)")
