@@ -70,6 +70,37 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, TypeError, OSError, RuntimeError) as exc:
         print(f"ibr {args.command}: error: {exc}", file=sys.stderr)
         return 1
+    except Exception as exc:
+        cv2 = sys.modules.get("cv2")  # no cv2.error without cv2 loaded; main() does not import it
+        if cv2 is None or not isinstance(exc, cv2.error):
+            raise
+        print(f"ibr {args.command}: error: {opencv_message(exc)}", file=sys.stderr)
+        return 1
+
+
+def opencv_message(exc: Exception) -> str:
+    """One line from a ``cv2.error``: its status and reason without OpenCV's version and source path.
+
+    Parameters
+    ----------
+    exc : cv2.error
+        The exception; its text reads ``OpenCV(5.0.0) /path/resize.cpp:4217: error:
+        (-215:Assertion failed) !ssize.empty() in function 'resize'``.
+
+    Returns
+    -------
+    str
+        ``OpenCV assertion failed: !ssize.empty() in function 'resize'`` for that text; the last
+        non-empty line prefixed with ``OpenCV: `` when the text has another form.
+    """
+    import re
+
+    text = str(exc).strip()
+    found = re.search(r"error: \(-?\d+:([^)]*)\)\s*(.*)", text, re.S)
+    if found is None:
+        return "OpenCV: " + (text.splitlines()[-1].strip() if text else type(exc).__name__)
+    reason = " ".join(found.group(2).split())
+    return f"OpenCV {found.group(1).strip().lower()}: {reason}"
 
 
 def _start_first_run_helper(args) -> None:

@@ -14,7 +14,7 @@ _LAYOUTS = ("dice", "horizon", "vstrip", "files", "hstrip", "exr", "cross", "hcr
 
 def add_arguments(parser) -> None:
     parser.add_argument("input", help="equirect image (2:1), cubemap image (6:1 horizon, 1:6 vstrip, "
-                        "4:3 dice) or a folder of px/nx/py/ny/pz/nz face files")
+                        "4:3 dice with empty corner cells) or a folder of px/nx/py/ny/pz/nz face files")
     parser.add_argument("-o", "--output", required=True,
                         help="output image (extension picks the format: .png 8/16-bit, .tif, .exr "
                         "float) or, for --layout files, a folder (face files of an earlier run there "

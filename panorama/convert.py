@@ -26,7 +26,8 @@ from ibr.base.validate import check_choice, check_finite_scalar, check_image, ch
 
 from . import maps as _maps
 from .depth import face_ray_lengths, planar_from_range, range_from_planar
-from .layouts import LAYOUTS, canonical_layout, layout_faces, unpack_faces
+from .layouts import DICE_EMPTY_MAX_SPREAD, LAYOUTS, canonical_layout, dice_unused_spread, layout_faces, \
+    unpack_faces
 from .sampling import INTERPOLATIONS, area_prefilter, pad_equirect, pad_faces, remap
 
 __all__ = ["cubemap_to_equirect", "equirect_to_cubemap", "perspective", "detect_layout",
@@ -159,8 +160,23 @@ def cubemap_to_equirect(cube, width: int, height: int, *, layout: str = "dict",
 def detect_layout(pano) -> str:
     """'equirect' or a cube layout from the type and shape of ``pano``.
 
-    list -> 'list', dict -> 'dict'; arrays: 2:1 -> 'equirect', 1:6 -> 'vstrip',
-    6:1 -> 'horizon', 4:3 -> 'dice'.
+    Parameters
+    ----------
+    pano : array, list or dict
+        list -> 'list', dict -> 'dict'; arrays: 2:1 -> 'equirect', 6:1 -> 'horizon',
+        1:6 -> 'vstrip', 4:3 -> 'dice' when its six unused cells are empty (one uniform colour,
+        :func:`panorama.layouts.dice_unused_spread` at most ``DICE_EMPTY_MAX_SPREAD``): a 4:3
+        photo of 512 x 384 is refused, the project's own dice images are not.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ValueError
+        No layout fits the shape, or a 4:3 image has picture content in the unused cells (the
+        message says how to force ``layout='dice'``).
     """
     if isinstance(pano, (list, tuple)):
         return "list"
@@ -171,11 +187,25 @@ def detect_layout(pano) -> str:
     for name, ok in (("equirect", w == 2 * h), ("horizon", w == 6 * h), ("vstrip", h == 6 * w),
                      ("dice", 3 * w == 4 * h)):
         if ok:
+            if name == "dice":
+                _check_dice_cells_empty(img)
             return name
     raise ValueError(
         f"pano: cannot tell the layout of a {w} x {h} image; expected 2:1 (equirect), 6:1 "
         f"(horizon), 1:6 (vstrip) or 4:3 (dice), or pass layout="
     )
+
+
+def _check_dice_cells_empty(img: np.ndarray) -> None:
+    """Refuse a 4:3 image whose unused dice cells hold picture content (an ordinary photo)."""
+    h, w = img.shape[:2]
+    spread = dice_unused_spread(img)  # 3 w = 4 h: h is a multiple of 3
+    if spread > DICE_EMPTY_MAX_SPREAD:
+        raise ValueError(
+            f"pano: a {w} x {h} (4:3) image is read as a dice cubemap only when its six unused cells are "
+            f"empty (one uniform colour); here they vary by {100 * spread:.1f}% of the value range (at most {100 * DICE_EMPTY_MAX_SPREAD:g}%), so it "
+            f"looks like an ordinary picture. To read it as a dice anyway, give the layout: layout='dice' "
+            f"(ibr cubemap --input-layout dice, ibr view --layout dice)")
 
 
 def perspective(pano, *, yaw_deg: float, pitch_deg: float, roll_deg: float = 0.0,

@@ -46,7 +46,8 @@ def read_panorama(path, *, layout: str | None = None):
 
     ``layout`` None detects it: a folder is ``'list'`` (faces read from ``px.* .. nz.*``), an image
     is classified by :func:`panorama.detect_layout` (2:1 equirect, 6:1 horizon, 1:6 vstrip,
-    4:3 dice). Raises FileNotFoundError for a missing path and ValueError for an unreadable file.
+    4:3 dice whose unused cells are empty). Raises FileNotFoundError for a missing path and ValueError
+    for an unreadable file or an image of no recognisable layout (a 4:3 photo).
     """
     path = Path(path)
     if not path.exists():

@@ -144,3 +144,24 @@ def test_view_layout_is_a_usage_error_and_lists_what_read_panorama_takes(tmp_pat
     assert cli.main(["view", str(pano), "--layout", "equirect", "--width", "64", "--height", "48",
                      "-o", str(tmp_path / "v.png")]) == 0
     assert (tmp_path / "v.png").is_file()
+
+
+def test_an_opencv_error_is_a_one_line_message(tmp_path, capsys, monkeypatch):
+    """A ``cv2.error`` escaping a command (the one-feature photo of ``stitch-photos`` raised
+    OpenCV's FLANN assertion) printed a traceback; main() turns it into the usual one-line error
+    with exit 1, keeping OpenCV's reason and function but not its source path."""
+    import cv2
+    import numpy as np
+
+    import panorama
+
+    def failing_stitch(*args, **kwargs):
+        return cv2.resize(np.zeros((0, 0), np.uint8), (4, 4))  # a real OpenCV assertion
+
+    monkeypatch.setattr(panorama, "stitch_photos", failing_stitch)
+    photo = DATA / "clutter_a_color.png"
+    out = tmp_path / "pano.png"
+    assert cli.main(["stitch-photos", str(photo), str(photo), "-o", str(out)]) == 1
+    line = _error_line(capsys, "stitch-photos")
+    assert line == "ibr stitch-photos: error: OpenCV assertion failed: !ssize.empty() in function 'resize'"
+    assert not out.exists()

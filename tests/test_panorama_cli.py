@@ -103,6 +103,26 @@ def test_cli_errors(tmp_path, capsys):
     assert not (tmp_path / "x.png").exists() and not (tmp_path / "v.png").exists()
 
 
+def test_cubemap_refuses_a_4x3_photo_unless_told(tmp_path, capsys):
+    """``ibr cubemap samples/data/clutter_a_color.png -o x.png`` took the 512 x 384 photo for a
+    dice cubemap (exit 0, garbage equirect). Now exit 1 with the library's message, nothing
+    written; ``--input-layout dice`` still forces it."""
+    from samples import DATA_DIR
+
+    photo = DATA_DIR / "clutter_a_color.png"
+    out = tmp_path / "x.png"
+    assert main(["cubemap", str(photo), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    with pytest.raises(ValueError) as exc:
+        P.detect_layout(read_image(photo))
+    assert err.strip() == f"ibr cubemap: error: {exc.value}" and "Traceback" not in err
+    assert "--input-layout dice" in err and not out.exists()
+    assert main(["view", str(photo), "-o", str(tmp_path / "v.png"), "--width", "32", "--height", "24"]) == 1
+    assert f"ibr view: error: {exc.value}" in capsys.readouterr().err
+    assert main(["cubemap", str(photo), "-o", str(out), "--input-layout", "dice", "--width", "64"]) == 0
+    assert read_image(out).shape == (32, 64, 3)
+
+
 # ------------------------------------------------------------------ web viewer
 @pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium)")
 def test_web_viewer_matches_library_render(tmp_path):

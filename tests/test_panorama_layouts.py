@@ -99,3 +99,66 @@ def test_aliases():
     np.testing.assert_array_equal(P.pack_faces(faces, "exr"), P.pack_faces(faces, "vstrip"))
     np.testing.assert_array_equal(P.pack_faces(faces, "cross"), P.pack_faces(faces, "dice"))
     np.testing.assert_array_equal(P.pack_faces(faces, "hstrip"), P.pack_faces(faces, "horizon"))
+
+
+# ----------------------------------------------------------------------------- auto-detection
+def _photo_4x3():
+    """The bundled clutter photo: an ordinary 512 x 384 (4:3) picture, no cubemap."""
+    from ibr.io import read_image
+    from samples import DATA_DIR
+
+    img = read_image(DATA_DIR / "clutter_a_color.png")
+    assert img.shape == (384, 512, 3)
+    return img
+
+
+def test_dice_detection_needs_empty_unused_cells(tmp_path):
+    """A 4:3 image is a dice only when its six unused cells are empty. Dice images of the project's
+    own packer (unused cells 0) are detected, also after a JPEG round trip (ringing at the face
+    edges) and with another uniform fill colour; the 4:3 photo is not (below)."""
+    from ibr.io import write_image
+    from panorama.files import read_panorama, write_cubemap
+
+    eq = np.rint(np.random.default_rng(4).random((64, 128, 3)) * 255).astype(np.uint8)
+    faces = P.equirect_to_cubemap(eq, 37, layout="list")
+    packed = P.pack_faces(faces, "dice")
+    assert P.detect_layout(packed) == "dice"
+    for ext in (".png", ".jpg"):
+        write_cubemap(tmp_path / f"c{ext}", faces, layout="dice")
+        img, layout = read_panorama(tmp_path / f"c{ext}")
+        assert layout == "dice" and img.shape == (111, 148, 3)
+    white = packed.copy()
+    white[layout_index_maps("dice", 37)[0] < 0] = 255
+    write_image(tmp_path / "white.png", white)
+    assert read_panorama(tmp_path / "white.png")[1] == "dice"
+    np.testing.assert_array_equal(P.unpack_faces(white, "dice")[4], faces[4])
+    _check_a_4x3_photo_is_refused(tmp_path)
+
+
+def _check_a_4x3_photo_is_refused(tmp_path):
+    """``ibr cubemap clutter_a_color.png -o x.png`` (512 x 384) read the photo as a 4 x 3 cross
+    and wrote a garbage equirect with exit 0. Auto-detection now refuses it, says why and how
+    to force the layout; an explicit layout is still honoured."""
+    from ibr.io import write_image
+    from panorama.files import read_panorama
+
+    photo = _photo_4x3()
+    expected = (r"pano: a 512 x 384 \(4:3\) image is read as a dice cubemap only when its six unused "
+                r"cells are empty.*layout='dice'.*--input-layout dice.*--layout dice")
+    with pytest.raises(ValueError, match=expected):
+        P.detect_layout(photo)
+    with pytest.raises(ValueError, match=expected):
+        P.perspective(photo, yaw_deg=0, pitch_deg=0, fov_deg=90, width=8, height=8)
+    write_image(tmp_path / "photo.png", photo)
+    with pytest.raises(ValueError, match=expected):
+        read_panorama(tmp_path / "photo.png")
+    # forced: the user's layout wins
+    assert read_panorama(tmp_path / "photo.png", layout="dice")[1] == "dice"
+    view = P.perspective(photo, yaw_deg=0, pitch_deg=0, fov_deg=90, width=8, height=8, layout="dice")
+    assert view.shape == (8, 8, 3)
+    # one unused cell of a real dice holding picture content is enough to refuse
+    dice = P.pack_faces(P.equirect_to_cubemap(np.zeros((64, 128, 3), np.uint8), 16, layout="list"), "dice")
+    assert P.detect_layout(dice) == "dice"
+    dice[32:48, 48:64] = photo[:16, :16]  # bottom-right cell
+    with pytest.raises(ValueError, match=expected.replace("512 x 384", "64 x 48")):
+        P.detect_layout(dice)

@@ -179,6 +179,54 @@ def test_zero_usable_photos_is_a_clear_error(sphere):
         stitch_photos(unrelated, width=101)
 
 
+
+def _one_feature_photo(width=320, height=240):
+    """A flat grey photo with one lopsided blob: SIFT finds exactly one keypoint in it (two
+    Gaussians, the second darker and off-centre, so the blob has a single dominant orientation)."""
+    y, x = np.mgrid[:height, :width]
+    blob = lambda cx, cy, s, a: a * np.exp(-((x - cx) ** 2 + (y - cy) ** 2) / (2 * s ** 2))  # noqa: E731
+    g = 128 + blob(width / 2, height / 2, 6.0, 100) + blob(width / 2 + 12, height / 2 + 8.4, 3.6, -40)
+    return np.dstack([np.clip(np.rint(g), 0, 255).astype(np.uint8)] * 3)
+
+
+def test_a_photo_with_one_feature_is_dropped_before_matching(sphere):
+    """``ibr stitch-photos`` with a ceiling view (one SIFT keypoint) ended in OpenCV's FLANN
+    assertion "(size_t)knn <= index_->size()": the photo went into the 2-nearest-neighbour
+    matcher and only then was checked against MIN_FEATURES. It is now dropped as
+    ``no_features`` before matching and the others are stitched."""
+    from panorama.photo.stitch import MIN_FEATURES
+    from panorama.photo.features import detect, registration_images
+
+    one = _one_feature_photo()
+    gray, _ = registration_images([one], 0.6)
+    assert len(detect(gray)[0].keypoints) == 1  # the case that crashed
+    p = cut_photos(sphere, [(0.0, 0.0), (45.0, 0.0)], width=320, height=240, hfov_deg=75.0)
+    res = stitch_photos([p.images[0], one, p.images[1]], width=512)
+    assert res.report.used == [0, 2] and res.report.dropped == {1: "no_features"}
+    assert res.report.images[1].features == 1 and res.cameras[1] is None
+    assert f"only 1 features (fewer than {MIN_FEATURES}); not matched" in res.report.table()
+    # one good photo left: the documented error, naming the dropped photo's reason
+    with pytest.raises(ValueError, match="no two of the 2 photos could be stitched") as exc:
+        stitch_photos([p.images[0], one], width=512)
+    assert "DROPPED (no_features)" in str(exc.value)
+
+
+def test_match_skips_photos_with_fewer_than_two_features(photos):
+    """The ratio test needs two neighbours: ``match`` leaves the pairs of a photo with one
+    keypoint empty instead of handing it to OpenCV's FLANN index (which asserts)."""
+    from panorama.photo.features import detect, match, registration_images
+
+    gray, _ = registration_images([photos.images[0], _one_feature_photo(), photos.images[1]], 0.6)
+    feats = detect(gray)
+    pairs = match(feats)
+    assert len(pairs) == 9
+    assert [(m.src_img_idx, m.dst_img_idx) for m in pairs[1::3]] == [(0, 1), (-1, -1), (2, 1)]
+    assert all(len(pairs[k].matches) == 0 and pairs[k].H is None for k in (1, 3, 5, 7))
+    assert pairs[2].src_img_idx == 0 and pairs[2].dst_img_idx == 2 and pairs[2].num_inliers >= 20
+    only = match(feats, only=[0, 1])
+    assert only[2].H is None and len(only[2].matches) == 0  # photo 2 left out on request
+
+
 # ----------------------------------------------------------------------------- helpers
 def test_helpers_exact_values():
     r = world_from_view(30.0, -20.0, 5.0)
@@ -230,6 +278,23 @@ def test_cli_writes_outputs_and_nothing_on_failure(tmp_path, photos, capsys):
     assert main(["stitch-photos", *paths, "-o", paths[0]]) == 1
     assert "refusing to overwrite an input" in capsys.readouterr().err
     assert read_image(paths[0]).shape == (300, 400, 3)
+
+
+
+def test_cli_drops_a_one_feature_photo_and_says_so(tmp_path, photos, capsys):
+    """The CLI side of the one-feature crash: exit 0, the photo reported as no_features."""
+    from cli import main
+    from ibr.io import write_image
+
+    paths = []
+    for k, img in enumerate([photos.images[0], _one_feature_photo(400, 300), photos.images[1]]):
+        paths.append(str(tmp_path / f"p{k}.png"))
+        write_image(paths[-1], img)
+    out = tmp_path / "pano.png"
+    assert main(["stitch-photos", *paths, "-o", str(out), "--width", "512"]) == 0
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.err and out.is_file()
+    assert "DROPPED (no_features)" in captured.out and "2 of 3 photos used" in captured.out
 
 
 @pytest.mark.parametrize("detector", ["sift", "orb", "akaze"])

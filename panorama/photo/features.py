@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-__all__ = ["DETECTORS", "KEYPOINT_BIAS", "PairData", "detect", "duplicates", "match",
+__all__ = ["DETECTORS", "KEYPOINT_BIAS", "MIN_MATCH_FEATURES", "PairData", "detect", "duplicates", "match",
            "pair_data", "registration_images", "rotation_misfit"]
 
 DETECTORS = ("sift", "orb", "akaze")
@@ -38,6 +38,8 @@ KEYPOINT_BIAS = {"sift": 0.25, "orb": 0.0, "akaze": 0.0}
 #: ``match_conf`` of BestOf2NearestMatcher per detector: a match is kept when its distance is
 #: below (1 - match_conf) times the second best (ratio test 0.7 for SIFT, as Lowe suggests).
 MATCH_CONF = {"sift": 0.3, "orb": 0.3, "akaze": 0.3}
+#: Fewest keypoints a photo needs to be matched at all: the ratio test compares the 2 nearest.
+MIN_MATCH_FEATURES = 2
 
 
 def _gray_u8(img: np.ndarray) -> np.ndarray:
@@ -100,16 +102,61 @@ def detect(gray_images, detector: str = "sift", masks=None) -> list:
     return feats
 
 
-def match(features, detector: str = "sift") -> list:
+def match(features, detector: str = "sift", *, only=None) -> list:
     """n x n pairwise ``MatchesInfo`` (index ``i * n + j``), confidences recomputed without
-    OpenCV's "> 3 means too close" zeroing (see module doc)."""
+    OpenCV's "> 3 means too close" zeroing (see module doc).
+
+    Parameters
+    ----------
+    features : list of cv2.detail.ImageFeatures
+        From :func:`detect`, one per photo.
+    detector : {'sift', 'orb', 'akaze'}
+        The detector that found them (sets the ratio test, :data:`MATCH_CONF`).
+    only : sequence of int, optional
+        Photos to match (default all). The pairs of every other photo are left empty (no
+        matches, ``H`` None), as OpenCV leaves a pair it could not match. A photo with fewer
+        than :data:`MIN_MATCH_FEATURES` keypoints is never matched: the 2-nearest-neighbour
+        ratio test needs two, and OpenCV's FLANN index asserts ``knn <= index size``.
+
+    Returns
+    -------
+    list of cv2.detail.MatchesInfo
+        ``pairs[i * n + j]`` matches photo i to photo j (source and destination indices i, j;
+        -1 on the diagonal, as OpenCV).
+    """
+    n = len(features)
+    keep = [k for k in (range(n) if only is None else only)
+            if len(features[k].keypoints) >= MIN_MATCH_FEATURES]
+    pairs = [_empty_pair(i, j) for i in range(n) for j in range(n)]
+    if len(keep) < 2:
+        return pairs
     matcher = cv2.detail.BestOf2NearestMatcher(False, MATCH_CONF[detector])
-    pairs = list(matcher.apply2(features))
+    sub = list(matcher.apply2([_reindexed(features[k], a) for a, k in enumerate(keep)]))
     matcher.collectGarbage()
-    for m in pairs:
-        if m.src_img_idx >= 0 and m.H is not None and np.size(m.H) == 9 and len(m.matches):
-            m.confidence = m.num_inliers / (8.0 + 0.3 * len(m.matches))
+    m_keep = len(keep)
+    for a, i in enumerate(keep):
+        for b, j in enumerate(keep):
+            m = sub[a * m_keep + b]
+            if m.src_img_idx >= 0:
+                m.src_img_idx, m.dst_img_idx = i, j
+            if m.src_img_idx >= 0 and m.H is not None and np.size(m.H) == 9 and len(m.matches):
+                m.confidence = m.num_inliers / (8.0 + 0.3 * len(m.matches))
+            pairs[i * n + j] = m
     return pairs
+
+
+def _empty_pair(i: int, j: int):
+    """A ``MatchesInfo`` without matches between photos i and j (-1, -1 on the diagonal)."""
+    m = cv2.detail.MatchesInfo()
+    m.src_img_idx, m.dst_img_idx = (-1, -1) if i == j else (i, j)
+    return m
+
+
+def _reindexed(f, idx: int):
+    """A copy of ``ImageFeatures`` ``f`` with ``img_idx`` = ``idx`` (its position in a subset)."""
+    g = cv2.detail.ImageFeatures()
+    g.img_idx, g.img_size, g.keypoints, g.descriptors = idx, f.img_size, f.keypoints, f.descriptors
+    return g
 
 
 @dataclass(frozen=True)

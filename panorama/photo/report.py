@@ -13,7 +13,8 @@ Reasons a photo is dropped (``ImageReport.reason``)
                      overlap at all.
 ``separate_group``   it matches other photos, but their group is not connected to the largest
                      group (two panoramas were mixed).
-``no_features``      too few features were found in it (blank, blurred, too small).
+``no_features``      too few features were found in it (blank, blurred, too small; fewer than
+                     ``stitch.MIN_FEATURES``); it is left out before matching.
 ``failed``           the camera estimate for it failed (bundle adjustment diverged).
 """
 

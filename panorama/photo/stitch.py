@@ -161,6 +161,19 @@ def _classify(report, est, data, candidates, conf_thresh):
                                   + ": another scene, or no overlap")
 
 
+def _drop_featureless(report, feats) -> list[int]:
+    """Drop the photos with fewer than :data:`MIN_FEATURES` features as ``no_features`` (before
+    matching: OpenCV's matcher asserts on a photo with one feature); return the others' indices."""
+    enough = []
+    for k, f in enumerate(feats):
+        count = len(f.keypoints)
+        if count < MIN_FEATURES:
+            report.images[k].drop("no_features", f"only {count} features (fewer than {MIN_FEATURES}); not matched")
+        else:
+            enough.append(k)
+    return enough
+
+
 def stitch_photos(images, *, width: int | None = None, names=None, masks=None, focal_px=None,
                   detector: str = "sift", registration_megapix: float = 0.6, conf_thresh: float = 1.0,
                   same_focal: bool = True, wave_correct: bool = True, reference: int = 0,
@@ -245,9 +258,10 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
         progress("features", n, n)
     for k, f in enumerate(feats):
         report.images[k].features = len(f.keypoints)
+    enough = _drop_featureless(report, feats)
 
     t0 = time.perf_counter()
-    pairs = match(feats, detector) if n > 1 else []
+    pairs = match(feats, detector, only=enough) if n > 1 else []
     data = pair_data(feats, pairs) if n > 1 else {}
     secs["matching"] = time.perf_counter() - t0
     if progress:
@@ -256,12 +270,10 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
     sizes = [g.shape[::-1] for g in gray]
     dup = duplicates(data, sizes)
     candidates = []
-    for k in range(n):
+    for k in enough:
         if k in dup:
             report.images[k].drop("duplicate", f"same view as photo {dup[k]} (homography moves no corner "
                                   f"by more than 1% of the diagonal)")
-        elif len(feats[k].keypoints) < MIN_FEATURES:
-            report.images[k].drop("no_features", f"only {len(feats[k].keypoints)} features")
         else:
             candidates.append(k)
 
