@@ -1,7 +1,8 @@
 """``ibr`` command line: thin subcommands over the ``ibr`` and ``panorama`` libraries.
 
-Exit codes: 0 success, 1 runtime error (bad data, missing file, failed computation),
-2 usage error (bad arguments). Run ``ibr <command> --help`` for each command's options.
+Exit codes: 0 success, 2 a command line the parser refuses (unknown option, bad choice, a value
+of the wrong type), 1 every other error (option values the command checks, bad data, missing
+files, a failed computation). Run ``ibr <command> --help`` for each command's options.
 """
 
 from __future__ import annotations
