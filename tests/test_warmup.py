@@ -4,9 +4,12 @@ the argument types of a real run, so the main process finds them in numba's cach
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -244,3 +247,57 @@ def test_the_cli_starts_the_helper_before_the_command_runs(monkeypatch):
     assert len(calls) == 1 and order[-1] == ("run", 1)
     assert cli.main(["warp", "a.json", "--to", "b.json", "-o", "x.png"]) == 0
     assert order[-1] == ("run", 1)  # the same kernels as interpolate's: the helper is asked once per process
+
+
+def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, monkeypatch):
+    """start_helper runs the "frame" helper with NUMBA_OPT=2 (its kernels compile faster and run
+    as fast; a user's NUMBA_OPT wins; the other helpers keep numba's default), and a frame
+    rendered from kernels the O2 helper cached (the plane fit, the rasterizer, the fill) is
+    bit-identical to one whose kernels were all compiled at the default level."""
+    import ibr.base.first_run as fr
+
+    seen = []
+
+    class FakeProc:
+        def __init__(self, argv, env=None, **kw):
+            seen.append((argv[3], env.get("NUMBA_OPT") if env else None))
+            shutil.rmtree(argv[4], ignore_errors=True)  # the marks folder start_helper made
+
+        def poll(self):
+            return 0
+
+    with monkeypatch.context() as m:  # subprocess.Popen itself: undone before the real runs below
+        m.setattr(fr.subprocess, "Popen", FakeProc)
+        m.setattr(fr, "atexit", type("NoAtexit", (), {"register": staticmethod(lambda *a: None)}))
+        for name in ("NUMBA_OPT", "IBR_NO_WARMUP", "NUMBA_DISABLE_JIT"):
+            m.delenv(name, raising=False)
+        for kind, user in (("frame", None), ("frame", "3"), ("stitch", None), ("mesh", None)):
+            m.setattr(fr, "_STARTED", [])
+            if user:
+                m.setenv("NUMBA_OPT", user)
+            fr.start_helper(kind)
+            m.delenv("NUMBA_OPT", raising=False)
+    assert seen == [("frame", "2"), ("frame", "3"), ("stitch", None), ("mesh", None)]
+
+    render = ("import numpy as np, sys\n"
+              "from ibr.io import load_view\n"
+              "from ibr.render.view_synthesis import interpolate\n"
+              "from samples import DATA_DIR\n"
+              "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
+              "g = load_view(DATA_DIR / 'clutter_t075.json')\n"
+              "r = interpolate(a, b, g.camera, fill='inpaint')\n"
+              "np.savez(sys.argv[1], c=r.color, z=r.depth)\n")
+    outs = []
+    for name, helper_opt in (("o2", "2"), ("o3", None)):
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / name), "PYTHONPATH": str(ROOT), "IBR_NO_WARMUP": "1"}
+        env.pop("NUMBA_OPT", None)
+        if helper_opt:
+            marks = tmp_path / f"marks-{name}"
+            marks.mkdir()
+            subprocess.run([sys.executable, "-m", "ibr.render.warmup", "frame", str(marks)],
+                           env={**env, "NUMBA_OPT": helper_opt}, check=True, timeout=300)
+        out = tmp_path / f"{name}.npz"
+        subprocess.run([sys.executable, "-c", render, str(out)], env=env, check=True, timeout=300, cwd=ROOT)
+        outs.append(np.load(out))
+    assert np.array_equal(outs[0]["c"], outs[1]["c"])
+    assert np.array_equal(outs[0]["z"], outs[1]["z"], equal_nan=True)

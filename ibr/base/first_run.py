@@ -22,7 +22,7 @@ from pathlib import Path
 
 from .validate import check_choice
 
-__all__ = ["GROUPS", "MAX_WAIT_S", "await_kernels", "mark", "start_helper"]
+__all__ = ["GROUPS", "HELPER_OPT", "MAX_WAIT_S", "await_kernels", "mark", "start_helper"]
 
 _STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
 #: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
@@ -32,6 +32,15 @@ GROUPS = {"frame": ("plane-fit", "raster", "fill"),
           "mesh": ("segment", "plane-fit")}
 _ALL_GROUPS = tuple(sorted({g for groups in GROUPS.values() for g in groups}))
 _READY: set = set()  # groups this process no longer waits for
+#: LLVM optimization level of the kernels the "frame" helper compiles (the plane fit, the
+#: rasterizer and the fill; numba's default is 3). -O2 compiles them 0.2-0.45 s faster (the helper
+#: alone: 4.0-4.2 -> 3.8 s, fresh caches), and their frames run as fast (paired runs, each from
+#: its own cache: 512² and 1080p two-source frames, the motorcycle warp within noise). The results
+#: are bit-identical (no fast-math in the rasterizer or the fill; the plane fit's re-associated
+#: moments vectorize alike at -O2 and -O3: its planes on random data and a whole frame compared,
+#: tests/test_warmup.py). The other helpers (the blend's fast-math kernels) keep numba's default;
+#: a user's NUMBA_OPT wins.
+HELPER_OPT = {"frame": "2"}
 #: The longest wait for one group (s): the helper takes ~8 s in all; past this the main process
 #: compiles the kernels itself (an overloaded machine, a helper stuck on its imports).
 MAX_WAIT_S = 15.0
@@ -65,7 +74,7 @@ def await_kernels(group: str) -> None:
 
 def start_helper(kind: str = "frame") -> None:
     """Start the helper process for ``kind`` (a key of :data:`GROUPS`: "frame" for the mesh's
-    plane fit, the rasterizer and the fill, "stitch" / "stitch-ods" for the ray rasterizer's setup,
+    plane fit, the rasterizer and the fill (at -O2, :data:`HELPER_OPT`), "stitch" / "stitch-ods" for the ray rasterizer's setup,
     the plane fit, the blend's accumulation and the mono / ODS panorama's hole fill, "mesh" for
     the segmentation's plane tests and plane fit) once per process (quietly; killed at exit if
     still running)."""
@@ -74,7 +83,10 @@ def start_helper(kind: str = "frame") -> None:
         return
     marks = Path(tempfile.mkdtemp(prefix="ibr-warmup-"))
     try:
-        proc = subprocess.Popen([sys.executable, "-m", "ibr.render.warmup", kind, str(marks)],
+        env = dict(os.environ)
+        if kind in HELPER_OPT:
+            env.setdefault("NUMBA_OPT", HELPER_OPT[kind])
+        proc = subprocess.Popen([sys.executable, "-m", "ibr.render.warmup", kind, str(marks)], env=env,
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError:
         shutil.rmtree(marks, ignore_errors=True)

@@ -6,8 +6,9 @@ compositor 1.6 s, hole fill 1.8 s) while the second core idled.
 :func:`ibr.base.first_run.start_helper` starts ``python -m ibr.render.warmup``, which calls the
 mesh's plane fit, the rasterizer and then the hole fill (its directional pass and pull-push) on a
 tiny scene with the argument types of a real run (uint8 colour, float32 depth, the mesh's
-read-only arrays), so they land in numba's on-disk cache while the main process compiles the
-segmentation's edge prefix and split and the compositor (the directional pass moved here from the
+read-only arrays), at LLVM -O2 (:data:`ibr.base.first_run.HELPER_OPT`), so they land in numba's
+on-disk cache while the main process compiles the segmentation's edge prefix and split and the
+compositor (the directional pass moved here from the
 main process: median first run 12.95 -> 12.70 s, three runs each on the 2-core machine);
 when the main process reaches them it loads them from the cache instead. ``python -m
 ibr.render.warmup stitch`` (``stitch-ods``) does the same for ``ibr stitch`` (the ray rasterizer's
@@ -41,7 +42,9 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     """Call the mesh's plane fit, the rasterizer and the hole fill once on a tiny scene (types as
     in a real run), in the order the main process will need them after its own segmentation
     kernels; mark groups "plane-fit", "raster" and "fill" (the directional fill and the
-    pull-push) in the directory ``marks`` as they land in the cache."""
+    pull-push) in the directory ``marks`` as they land in the cache.
+    :func:`ibr.base.first_run.start_helper` runs this process with LLVM at -O2
+    (:data:`ibr.base.first_run.HELPER_OPT`)."""
     from ..base.camera import Camera
     from ..mesh import _segment_kernels as k
     from . import fill
