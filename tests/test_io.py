@@ -127,6 +127,9 @@ def test_read_image_missing_corrupt_truncated(tmp_path):
     with pytest.raises(ValueError, match=r"cut\.png") as err:
         read_image(tmp_path / "cut.png")
     assert "\n" not in str(err.value)  # OpenImageIO's three lines about it, joined: errors are one line
+    # each distinct line once: "Read error: hit end of file" stood alone and again inside the next
+    message = str(err.value).split("cut.png: ", 1)[1]
+    assert message.count("hit end of file") == 1, message
     with pytest.raises(IsADirectoryError, match="expected a file"):
         read_image(tmp_path)
 

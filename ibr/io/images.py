@@ -229,8 +229,15 @@ def _read_pfm_named(path: Path, what: str) -> np.ndarray:
 
 
 def _one_line(message) -> str:
-    """OpenImageIO's error text on one line (a corrupt PNG gave three, #12: errors are one line)."""
-    return " ".join(str(message or "").split())
+    """OpenImageIO's error text on one line (#12: errors are one line), each distinct line once: a
+    truncated PNG gave "Read error: hit end of file in png reader", "PNG read error: IDAT: Read
+    error: hit end of file in png reader" and "PNG library error"; a line contained in another is
+    left out, the others are joined by "; "."""
+    lines = [" ".join(line.split()) for line in str(message or "").splitlines()]
+    lines = [line for line in lines if line]
+    kept = [line for i, line in enumerate(lines)
+            if not any(line != other and line in other for other in lines) and line not in lines[:i]]
+    return "; ".join(kept)
 
 
 def check_write_dtype(name: str, path, dtype) -> str:
