@@ -381,9 +381,12 @@ _UPLOAD_NAME = re.compile(r"^[A-Za-z0-9_-]{1,64}\.(png|jpg|jpeg)$")
 
 def write_canvas_site(folder) -> Path:
     """Copy ``canvas.js`` (the click-to-place UI) into a viewer site written by
-    :func:`panorama.viewer.write_site`; return its path."""
+    :func:`panorama.viewer.write_site` and let its page load it; return the script's path."""
+    from .viewer import copy_page
+
     dst = Path(folder) / "canvas.js"
     shutil.copyfile(WEB_DIR / "canvas.js", dst)
+    copy_page(folder, canvas=True)
     return dst
 
 

@@ -171,11 +171,23 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
     return copy_page(folder)
 
 
-def copy_page(folder) -> Path:
-    """Copy the viewer page into a site ``folder``; return its path. (The page also asks for
-    ``canvas.js``, which only ``ibr view PANO --serve`` adds: its canvas UI needs that server.)"""
+#: The page's tag for the canvas UI (``canvas.js``): kept only in sites that
+#: :func:`panorama.canvas.write_canvas_site` completes for ``ibr view PANO --serve`` (the UI
+#: saves through that server); a static site asked for a file it does not have (a 404 on every load).
+CANVAS_SCRIPT_TAG = '<script src="canvas.js"></script>'
+
+
+def copy_page(folder, *, canvas: bool = False) -> Path:
+    """Write the viewer page into a site ``folder``; return its path. ``canvas``: keep the tag
+    that loads the canvas UI (:data:`CANVAS_SCRIPT_TAG`; only sites served with their canvas
+    store have ``canvas.js``)."""
     page = Path(folder) / "index.html"
-    shutil.copyfile(WEB_DIR / "index.html", page)
+    html = (WEB_DIR / "index.html").read_text(encoding="utf-8")
+    if CANVAS_SCRIPT_TAG not in html:
+        raise RuntimeError(f"{WEB_DIR / 'index.html'}: no {CANVAS_SCRIPT_TAG} (the page and viewer.py disagree)")
+    if not canvas:
+        html = html.replace(CANVAS_SCRIPT_TAG + "\n", "").replace(CANVAS_SCRIPT_TAG, "")
+    page.write_text(html, encoding="utf-8")
     return page
 
 

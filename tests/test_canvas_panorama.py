@@ -285,3 +285,18 @@ def test_viewer_click_places_an_image_and_draws_strokes(tmp_path):
         server.shutdown()
         server.server_close()
         shutil.rmtree(profile, ignore_errors=True)
+
+
+def test_only_a_canvas_site_asks_for_canvas_js(tmp_path):
+    """A static viewer site (write_site, a tour site) has no canvas.js, so its page does not ask
+    for it (a 404 on every load); write_canvas_site adds the script and the page's tag."""
+    from panorama.viewer import CANVAS_SCRIPT_TAG
+
+    site = tmp_path / "site"
+    write_site(site, np.full((32, 64, 3), 0.5, np.float32), face_size=8)
+    page = (site / "index.html").read_text(encoding="utf-8")
+    assert "canvas.js" not in page and not (site / "canvas.js").exists()
+    assert "</html>" in page and "viewer.json" in page  # the rest of the page is there
+    write_canvas_site(site)
+    assert CANVAS_SCRIPT_TAG in (site / "index.html").read_text(encoding="utf-8")
+    assert (site / "canvas.js").is_file()
