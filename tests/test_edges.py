@@ -544,3 +544,54 @@ def test_one_pixel_cracks_between_the_quads_of_a_curved_surface_are_closed():
     ys, xs = np.array([182, 183, 184, 185, 186]), np.array([199, 199, 199, 200, 200])
     d = np.abs(mid.color[ys, xs].astype(int) - truth.color[ys, xs].astype(int)).max(-1)
     assert d.max() <= 5, d
+
+
+def _two_quad_step(axis, t, w=200, h=200):
+    """Two quads of 1/z planes 0.5 and 0.4925 (z = 2 and 2.03) meeting along a horizontal
+    (``axis`` 0) or vertical (1) edge, and a target camera moved by ``t`` across that edge."""
+    from ibr.mesh.quad_mesh import QuadMesh
+
+    src = Camera(100.0, 100.0, (w - 1) / 2, (h - 1) / 2, w, h)
+    half = [[0, 0, w, h // 2], [0, h // 2, w, h]] if axis == 0 else [[0, 0, w // 2, h], [w // 2, 0, w, h]]
+    qop = np.zeros((h, w), np.int32)
+    qop[(slice(h // 2, None), slice(None)) if axis == 0 else (slice(None), slice(w // 2, None))] = 1
+    mesh = QuadMesh(src, np.array(half, np.int32), np.array([[0.0, 0.0, 0.5], [0.0, 0.0, 0.5 * 0.985]]), qop, {})
+    pose = np.eye(4)
+    pose[1 if axis == 0 else 0, 3] = t
+    return mesh, Camera(100.0, 100.0, (w - 1) / 2, (h - 1) / 2, w, h, pose)
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_a_one_pixel_crack_along_rows_and_columns_is_closed_and_a_wider_gap_is_not(axis):
+    """The shared edge of two quads 1.5 % apart in depth opens into a one-pixel line (a row of
+    pixels for a horizontal edge, closed by the column pass; a column for a vertical one, closed
+    by the raster kernel's row pass) when the camera moves across it; view synthesis's crack
+    closing fills exactly that line, at a depth between the two planes', the same on every run
+    (two threads, row bands); a gap of several pixels (a larger move) stays open."""
+    from ibr.render.rasterize import CRACK_REL, SourceMaps, _rasterize_many_into
+
+    def render(mesh, cam, rel):
+        h, w = cam.shape
+        out = SourceMaps(*(np.empty((h, w), np.float32) for _ in range(3)), np.empty((h, w), np.bool_))
+        return _rasterize_many_into([mesh], cam, "free", 0.01, [out], crack_rel=rel)[0]
+
+    mesh, cam = _two_quad_step(axis, 1.6)
+    exact, closed = render(mesh, cam, 0.0), render(mesh, cam, CRACK_REL)
+    line = ~exact.coverage & closed.coverage
+    cov = exact.coverage
+    inner = np.zeros_like(cov)
+    if axis == 0:
+        inner[1:-1] = ~cov[1:-1] & cov[:-2] & cov[2:]
+    else:
+        inner[:, 1:-1] = ~cov[:, 1:-1] & cov[:, :-2] & cov[:, 2:]
+    assert inner.sum() == 200 and np.array_equal(line, inner)  # the whole one-pixel line, nothing else
+    assert ((closed.depth[line] > 2.0 - 1e-3) & (closed.depth[line] < 2.0 / 0.985 + 1e-3)).all()
+    again = render(mesh, cam, CRACK_REL)
+    for name in ("depth", "map_u", "map_v", "coverage"):
+        assert np.array_equal(getattr(again, name), getattr(closed, name), equal_nan=True)
+    mesh, cam = _two_quad_step(axis, 4.0, 600, 600)  # a gap of 2-3 px: a disocclusion, not a crack
+    wide_exact, wide = render(mesh, cam, 0.0), render(mesh, cam, CRACK_REL)
+    line = wide_exact.coverage[:, 300] if axis == 0 else wide_exact.coverage[300]
+    gaps = np.diff(np.flatnonzero(line))
+    assert gaps.max() >= 3  # the open gap between the two quads
+    assert np.array_equal(wide.coverage, wide_exact.coverage)

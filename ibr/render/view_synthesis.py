@@ -28,8 +28,8 @@ from .composite import (COMPOSITE_MODES, Composite, composite, mixed_pixels, pac
                         rgbt_source, rim_beside_holes, sample_composite, source_trust, viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_previous_inplace, _fill_pullpush_inplace, parallax_axis
 from .supersample import check_supersample, downsample_rendering, supersampled_camera
-from .rasterize import (FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_many_into, as_float_color, sample_maps, scratch,
-                        scratch_maps)
+from .rasterize import (CRACK_REL, FOOTPRINTS, INTERPOLATIONS, Layer, _rasterize_many_into, as_float_color,
+                        sample_maps, scratch, scratch_maps)
 from ..base.view import View
 
 __all__ = [
@@ -48,14 +48,6 @@ METHODS = ("mesh", "forward")
 #: Level-of-detail sources: the camera move of the call (default) or 5 % of the median depth.
 LODS = ("move", "depth")
 
-#: One-pixel cracks along a row of a source's rendering, between two pixels within this relative
-#: depth of each other, are closed before compositing (two neighbouring quads of a curved surface
-#: have different planes, so their shared edge opens by a pixel in another view; where the other
-#: source sees the background there it showed through, e.g. a jagged orange line along clutter's
-#: dark sphere at t = 0.5, #11). Measured (bench_edges, after the fill): clutter all pixels
-#: 36.82 -> 36.84 dB, band 28.27 -> 28.32; room 38.34 -> 38.34 / 30.98 -> 31.02; 0.05 closed
-#: pixels across real depth steps, 0.01 left half the cracks open.
-CRACK_REL = 0.02
 
 
 @dataclass(frozen=True, eq=False)

@@ -48,7 +48,7 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     from ..base.camera import Camera
     from ..mesh import _segment_kernels as k
     from . import fill
-    from .rasterize import rasterize_mesh
+    from .rasterize import CRACK_REL, _rasterize_many_into, scratch_maps
 
     h, w = 24, 32
     k.fit_planes_inv_depth(np.ones((h, w)), np.array([[0, 0, w, h]], np.int32))
@@ -56,7 +56,8 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     mesh = _tiny_mesh()
     moved = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h,
                    np.array([[1, 0, 0, 0.3], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]))
-    rasterize_mesh(mesh, moved)
+    # as view synthesis rasterizes: with its crack closing (the column pass is a kernel of its own)
+    _rasterize_many_into([mesh], moved, "free", 0.01, [scratch_maps("warm", moved.shape)], crack_rel=CRACK_REL)
     _mark(marks, "raster")
     color = np.full((h, w, 3), 128, np.uint8)
     depth = np.full((h, w), 3.0, np.float32)
