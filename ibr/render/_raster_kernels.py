@@ -229,7 +229,7 @@ def _bucket(bbox, rows_per_band, count, fill, quads):
 
 
 def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_start, band_quads, far_coord,
-                  crack_rel, depth, map_u, map_v, coverage):
+                  crack_rel, src_inv, depth, map_u, map_v, coverage):
     """Z-buffered rasterization of quads into source-coordinate maps, one band of target rows
     per parallel task (each band owns its rows: no write races).
 
@@ -242,7 +242,10 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
     pixel between two covered row neighbours whose depths are within ``crack_rel`` of the nearer
     takes their mean map coordinates and the mean of their inverse depths (two neighbouring
     quads of a curved surface have different planes, so their shared edge can open by a pixel
-    in another view); 0 leaves them.
+    in another view), if the source pixel at those mean coordinates lies on the neighbours'
+    surface too (``src_inv`` (H_s, W_s) float32: the mesh's inverse depth per source pixel, 0
+    where none): behind a one-pixel pole the wall's two sides agree, but halfway between their
+    samples is the pole; 0 leaves them.
     """
     nbands = band_start.shape[0] - 1
     rows_per_band = (height + nbands - 1) // nbands
@@ -338,18 +341,39 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
                 murow[u] = murow[u] if cov else far_coord
                 mvrow[u] = mvrow[u] if cov else far_coord
             if crack_rel > 0.0:
-                _close_row_cracks(drow, crow, murow, mvrow, width, crack_rel)
+                _close_row_cracks(drow, crow, murow, mvrow, width, crack_rel, src_inv)
 
 
 @njit(cache=True, error_model="numpy")
-def _close_row_cracks(drow, crow, murow, mvrow, width, rel):
+def _src_inv_at(src_inv, x, y):
+    """The source's inverse depth at the nearest pixel of (x, y), clamped to the image."""
+    h, w = src_inv.shape
+    return src_inv[min(max(int(np.floor(y + 0.5)), 0), h - 1), min(max(int(np.floor(x + 0.5)), 0), w - 1)]
+
+
+@njit(cache=True, error_model="numpy")
+def _crack_between(za, zb, ua, va, ub, vb, rel, src_inv):
+    """Whether the gap between two covered target pixels (depths za, zb; source coordinates
+    (ua, va), (ub, vb)) is a crack of one surface: their depths agree within ``rel`` and the
+    source pixel halfway between their samples lies on that surface in the source (its inverse
+    depth within ``rel`` of both samples'), not on a thin object in front of it."""
+    if not (abs(za - zb) <= rel * min(za, zb)):
+        return False
+    qa = _src_inv_at(src_inv, ua, va)
+    qb = _src_inv_at(src_inv, ub, vb)
+    qm = _src_inv_at(src_inv, 0.5 * (ua + ub), 0.5 * (va + vb))
+    return qm > 0.0 and abs(qm - qa) <= rel * max(qm, qa) and abs(qm - qb) <= rel * max(qm, qb)
+
+
+@njit(cache=True, error_model="numpy")
+def _close_row_cracks(drow, crow, murow, mvrow, width, rel, src_inv):
     """One-pixel cracks of one target row closed (see :func:`_raster_quads`, ``crack_rel``)."""
     for u in range(1, width - 1):
         if crow[u] or not (crow[u - 1] and crow[u + 1]):
             continue
         zl = drow[u - 1]
         zr = drow[u + 1]
-        if abs(zl - zr) <= rel * min(zl, zr):
+        if _crack_between(zl, zr, murow[u - 1], mvrow[u - 1], murow[u + 1], mvrow[u + 1], rel, src_inv):
             drow[u] = 2.0 / (1.0 / zl + 1.0 / zr)
             murow[u] = 0.5 * (murow[u - 1] + murow[u + 1])
             mvrow[u] = 0.5 * (mvrow[u - 1] + mvrow[u + 1])
@@ -357,10 +381,11 @@ def _close_row_cracks(drow, crow, murow, mvrow, width, rel):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def close_column_cracks(v0, v1, depth, coverage, map_u, map_v, rel, before):
+def close_column_cracks(v0, v1, depth, coverage, map_u, map_v, rel, before, src_inv):
     """One-pixel cracks along columns, rows ``v0 .. v1-1``: an uncovered pixel between two covered
-    column neighbours whose depths agree within ``rel`` of the nearer takes their mean map
-    coordinates and inverse depth (:func:`_raster_quads` closes the row cracks). Decided on
+    column neighbours whose depths agree within ``rel`` of the nearer, and halfway between whose
+    source samples the source shows the same surface (:func:`_crack_between`), takes their mean
+    map coordinates and inverse depth (:func:`_raster_quads` closes the row cracks). Decided on
     ``before``, the coverage as the raster left it, so that row bands on other threads, which
     write only pixels uncovered there, never change what a band reads: deterministic."""
     h, w = before.shape
@@ -373,7 +398,8 @@ def close_column_cracks(v0, v1, depth, coverage, map_u, map_v, rel, before):
                 continue
             za = depth[v - 1, u]
             zb = depth[v + 1, u]
-            if abs(za - zb) <= rel * min(za, zb):
+            if _crack_between(za, zb, map_u[v - 1, u], map_v[v - 1, u], map_u[v + 1, u], map_v[v + 1, u], rel,
+                              src_inv):
                 depth[v, u] = 2.0 / (1.0 / za + 1.0 / zb)
                 map_u[v, u] = 0.5 * (map_u[v - 1, u] + map_u[v + 1, u])
                 map_v[v, u] = 0.5 * (map_v[v - 1, u] + map_v[v + 1, u])

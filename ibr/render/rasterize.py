@@ -139,6 +139,22 @@ def _mesh_inv_depth(mesh) -> np.ndarray:
     return inv
 
 
+_inv_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_NO_SOURCE = np.zeros((1, 1), np.float32)  # src_inv when no crack is closed: read-only like the
+_NO_SOURCE.setflags(write=False)           # cached ones, so the kernel has one signature
+
+
+def _source_inv_depth(mesh) -> np.ndarray:
+    """(H, W) float32 :func:`_mesh_inv_depth` of ``mesh``, read-only, cached per mesh (the crack
+    closing's test of the source surface)."""
+    inv = _inv_cache.get(mesh)
+    if inv is None:
+        inv = _mesh_inv_depth(mesh).astype(np.float32)
+        inv.setflags(write=False)
+        _inv_cache[mesh] = inv
+    return inv
+
+
 def _clamp_flags(mesh, footprint: str, depth_tol: float) -> np.ndarray:
     nq = len(mesh.rects)
     if footprint == "none":
@@ -224,8 +240,10 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
                   h, coef, bbox, min_rows=4096)  # quads: a piece per thread from 8192 quads on
         flags = _clamp_flags(mesh, footprint, depth_tol)
         start, order = _k.bucket_bands(bbox, h, _nbands(h))
+        src_inv = _source_inv_depth(mesh) if crack_rel > 0 else _NO_SOURCE
         jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, _FAR,
-                                             float(crack_rel), out.depth, out.map_u, out.map_v, out.coverage)))
+                                             float(crack_rel), src_inv, out.depth, out.map_u, out.map_v,
+                                             out.coverage)))
         first += len(start) - 1
 
     def bands(b0, b1):  # bands b0 .. b1-1 of all meshes, numbered one after the other
@@ -240,8 +258,9 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
         before = [out.coverage.copy() for out in outs]
 
         def columns(v0, v1):  # rows v0 .. v1-1 of every output, one dispatch of the pool
-            for out, cov in zip(outs, before):
-                _k.close_column_cracks(v0, v1, out.depth, out.coverage, out.map_u, out.map_v, float(crack_rel), cov)
+            for mesh, out, cov in zip(meshes, outs, before):
+                _k.close_column_cracks(v0, v1, out.depth, out.coverage, out.map_u, out.map_v, float(crack_rel), cov,
+                                       _source_inv_depth(mesh))
 
         run_bands(columns, h, min_rows=64 if h * w >= _PARALLEL_PIXELS else h)
     return outs
