@@ -109,12 +109,13 @@ def _start_first_run_helper(args) -> None:
     a second process now, before the command's own imports and input checks (0.25 s earlier than
     from inside the command, on the first run's critical path, #13). A command module names its
     kernels with ``first_run_kernels(args) -> (modules, warm kind) or None``."""
-    kernels = args._first_run(args) if args._first_run is not None else None
-    if kernels is not None:
-        from commands._common import note_first_run
+    from commands._common import forget_first_run, note_first_run
 
+    forget_first_run()  # a new command: look at the cache again
+    kernels = args._first_run(args) if args._first_run is not None else None
+    if kernels is not None:  # quietly: the command says it after its own input checks
         modules, warm = kernels
-        note_first_run(*modules, warm=warm)
+        note_first_run(*modules, warm=warm, announce=False)
 
 
 def run(argv: list[str] | None = None) -> None:

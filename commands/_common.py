@@ -157,44 +157,63 @@ def face_file_patterns(ext: str | None = None) -> tuple[str, ...]:
     return tuple(dict.fromkeys(f"{n}{e}" for n in FACE_FILE_NAMES for e in anycase))
 
 
-def note_first_run(*modules: str, warm: str = "frame") -> bool:
-    """Say before a long first run that numba is compiling (once): when none of ``modules``
-    (kernel modules, e.g. ``"ibr.render._raster_kernels"``) has a numba cache index yet; then
-    also start compiling the kernels ``warm`` names ("frame": the plane fit, the rasterizer and the
-    hole fill's pull-push; "stitch" / "stitch-ods": the ray rasterizer's setup, the plane fit,
-    the blend's accumulation and the panorama's hole fill; "mesh": the
-    segmentation's plane tests and plane fit) in a second process (:mod:`ibr.render.warmup`).
-    Returns whether this is such a first run. A second call with the same arguments returns the
-    first call's answer without saying it again (the CLI calls it before the command's imports,
-    :func:`cli.main`, and the command calls it again for callers of its ``run``)."""
+def note_first_run(*modules: str, warm: str = "frame", announce: bool = True) -> bool:
+    """Whether numba has kernels of ``modules`` (kernel modules, e.g.
+    ``"ibr.render._raster_kernels"``) to compile: a module without a cache index, or with one
+    older than its source (an update); then start compiling the kernels ``warm`` names ("frame":
+    the plane fit, the rasterizer and the hole fill's pull-push; "stitch" / "stitch-ods": the ray
+    rasterizer's setup, the plane fit, the blend's accumulation and the panorama's hole fill;
+    "mesh": the segmentation's plane tests and plane fit) in a second process
+    (:mod:`ibr.render.warmup`) and, with ``announce``, say so (once). The answer is kept for the
+    rest of the command (:func:`forget_first_run` at the start of the next): the CLI asks first,
+    quietly, before the command's imports and input checks (:func:`cli.main`); the command asks
+    again after its checks, and only then is the line printed."""
     key = (modules, warm)
     if key not in _FIRST_RUN_NOTED:
         _FIRST_RUN_NOTED[key] = _note_first_run(modules, warm)
+    if _FIRST_RUN_NOTED[key] and announce and key not in _FIRST_RUN_SAID:
+        _FIRST_RUN_SAID.add(key)
+        info("compiling the numba kernels (a first run, or new sources: 5-15 s on two cores, once; "
+             "later runs load them from the cache)")
     return _FIRST_RUN_NOTED[key]
 
 
-_FIRST_RUN_NOTED: dict = {}  # (modules, warm) -> note_first_run's answer in this process
+_FIRST_RUN_NOTED: dict = {}  # (modules, warm) -> note_first_run's answer for this command
+_FIRST_RUN_SAID: set = set()  # the keys whose line was printed
+
+
+def forget_first_run() -> None:
+    """Start a new command: the next :func:`note_first_run` looks at the cache again."""
+    _FIRST_RUN_NOTED.clear()
+    _FIRST_RUN_SAID.clear()
 
 
 def _note_first_run(modules, warm: str) -> bool:
-    import importlib.util
     import os
 
     if os.environ.get("NUMBA_DISABLE_JIT"):
         return False  # no compilation: nothing to say
-    cache_dir = os.environ.get("NUMBA_CACHE_DIR")
-    for name in modules:
-        spec = importlib.util.find_spec(name)
-        if spec is None or spec.origin is None:
-            return False
-        path = Path(spec.origin)
-        # numba's index files: __pycache__ beside the module, or <folder>_<hash>/ under NUMBA_CACHE_DIR
-        caches = ([path.parent / "__pycache__"] if not cache_dir
-                  else list(Path(cache_dir).glob(f"{path.parent.name}_*")))
-        if any(c.is_dir() and any(c.glob(f"{path.stem}.*.nbi")) for c in caches):
-            return False
+    if not any(_stale_kernels(name) for name in modules):
+        return False
     from ibr.base.first_run import start_helper
 
     start_helper(warm)
-    info("first run: compiling the numba kernels (5-15 s on two cores, once; later runs load them from the cache)")
     return True
+
+
+def _stale_kernels(name: str) -> bool:
+    """Whether kernel module ``name`` has no numba cache index, or only ones older than its
+    source (numba then compiles its kernels again)."""
+    import importlib.util
+    import os
+
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.origin is None:
+        return False
+    path = Path(spec.origin)
+    cache_dir = os.environ.get("NUMBA_CACHE_DIR")
+    # numba's index files: __pycache__ beside the module, or <folder>_<hash>/ under NUMBA_CACHE_DIR
+    caches = [path.parent / "__pycache__"] if not cache_dir else list(Path(cache_dir).glob(f"{path.parent.name}_*"))
+    source_time = path.stat().st_mtime
+    indexes = [p for c in caches if c.is_dir() for p in c.glob(f"{path.stem}.*.nbi")]
+    return not any(p.stat().st_mtime >= source_time for p in indexes)

@@ -195,10 +195,16 @@ def write_video(path, frames, fps: float) -> None:
 FRAME_PATTERNS = tuple(f"frame_#_t{sign}#.#{tail}" for sign in ("", "-") for tail in (".png", "_holes.png", ".exr"))
 
 
+#: The kernel modules an interpolation (and a mesh warp) runs: the segmentation, the rasterizer,
+#: the compositor and the fill (any of them without a fresh numba cache: a first run).
+FRAME_KERNELS = ("ibr.mesh._segment_kernels", "ibr.render._raster_kernels", "ibr.render._composite_kernels",
+                 "ibr.render._fill_kernels")
+
+
 def first_run_kernels(args):
     """The kernel modules this run compiles and the first-run helper's kind (:func:`cli.main`
     starts the helper with them before the command's imports, #13)."""
-    return ("ibr.mesh._segment_kernels", "ibr.render._composite_kernels"), "frame"
+    return FRAME_KERNELS, "frame"
 
 
 def run(args) -> int:
@@ -254,11 +260,12 @@ def run(args) -> int:
         sheet = plan.add_file("--contact-sheet", args.contact_sheet, (".png", ".jpg", ".jpeg", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
         modules, warm = first_run_kernels(args)
-        compiling = note_first_run(*modules, warm=warm)
+        compiling = note_first_run(*modules, warm=warm, announce=False)  # (cli.main started the helper)
         # imported after the first-run helper has started: numba's import (0.3 s) then overlaps it
         from ibr.render.view_synthesis import iter_interpolate, source_mesh
 
         view_a, view_b = load_view(path_a), load_view(path_b)
+        note_first_run(*modules, warm=warm)  # the inputs read: now say that numba compiles
 
         if args.method == "mesh" and args.supersample == 1:  # supersampled: meshes of the upsampled
             t0 = time.perf_counter()                           # sources, built with the first frame

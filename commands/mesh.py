@@ -66,10 +66,11 @@ def run(args) -> int:
             mtl = plan.add_file("--obj (its material file)", obj.with_suffix(".mtl"), (".mtl",))
         plan.check()  # every output checked before any work (#12)
         modules, warm = first_run_kernels(args)
-        note_first_run(*modules, warm=warm)
+        note_first_run(*modules, warm=warm, announce=False)  # (cli.main started the helper)
         from ibr.mesh.quad_mesh import build_mesh  # after the helper's start (numba: 0.3 s)
 
         view = load_view(args.view)
+        note_first_run(*modules, warm=warm)  # the input read: now say that numba compiles
         if viz:
             check_image_size("--viz-scale", view.shape[1] * args.viz_scale, view.shape[0] * args.viz_scale,
                              channels=3, itemsize=1)

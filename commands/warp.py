@@ -56,7 +56,9 @@ def first_run_kernels(args):
     splat, no helper); :func:`cli.main` starts the helper with them before the command's imports."""
     if args.method != "mesh":
         return None
-    return ("ibr.mesh._segment_kernels", "ibr.render._composite_kernels"), "frame"  # interpolate's
+    from commands.interpolate import FRAME_KERNELS
+
+    return FRAME_KERNELS, "frame"  # interpolate's
 
 
 def run(args) -> int:
@@ -79,13 +81,15 @@ def run(args) -> int:
         depth_out = plan.add_file("--depth-out", args.depth_out, (".exr", ".tif", ".tiff", ".pfm"))
         holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
-        if first_run_kernels(args) is not None:  # the helper compiles raster and fill
-            modules, warm = first_run_kernels(args)
-            note_first_run(*modules, warm=warm)
+        kernels = first_run_kernels(args)
+        if kernels is not None:  # the helper compiles raster and fill (cli.main started it already)
+            note_first_run(*kernels[0], warm=kernels[1], announce=False)
         from ibr.render.view_synthesis import source_mesh, warp  # after the helper's start (numba: 0.3 s)
 
         view = load_view(args.view)
         target = load_camera(args.to)
+        if kernels is not None:  # the inputs read: now say that numba compiles
+            note_first_run(*kernels[0], warm=kernels[1])
         if args.method == "mesh" and view.depth is not None and args.supersample == 1:
             t0 = time.perf_counter()
             mesh = source_mesh(view)

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -223,11 +224,12 @@ def test_a_forked_child_leaves_the_helper_and_its_marks_alone(tmp_path, monkeypa
         helper.wait()
 
 
-def test_the_cli_starts_the_helper_before_the_command_runs(monkeypatch):
-    """cli.main asks for the first-run helper with the command's kernels before the command's
-    own imports and checks (#13: 0.25 s earlier on the first run's critical path): the kernels of
-    `ibr interpolate` and of a mesh `ibr warp`, none for a forward-splat warp; the command's own
-    later call returns the same answer without saying it twice."""
+def test_the_cli_starts_the_helper_before_the_command_runs(monkeypatch, capsys):
+    """cli.main asks, quietly, for the first-run helper with the command's kernels before the
+    command's own imports and checks (#13: 0.25 s earlier on the first run's critical path): the
+    kernels of `ibr interpolate` and of a mesh `ibr warp`, none for a forward-splat warp. The line
+    saying so comes from the command's own call, after its input checks (a bad command line
+    says nothing of compiling), once; the next command looks at the cache again."""
     import cli
     import commands._common as common
     import commands.interpolate as interpolate
@@ -235,18 +237,50 @@ def test_the_cli_starts_the_helper_before_the_command_runs(monkeypatch):
 
     calls, order = [], []
     monkeypatch.setattr(common, "_note_first_run", lambda modules, warm: calls.append((modules, warm)) or True)
-    monkeypatch.setattr(common, "_FIRST_RUN_NOTED", {})
-    monkeypatch.setattr(interpolate, "run", lambda args: order.append(("run", len(calls))) or 0)
-    monkeypatch.setattr(warp, "run", lambda args: order.append(("run", len(calls))) or 0)
+
+    def command(args):
+        order.append(("run", len(calls)))
+        if args.command == "interpolate":
+            common.note_first_run(*interpolate.FRAME_KERNELS, warm="frame")  # after its checks
+            common.note_first_run(*interpolate.FRAME_KERNELS, warm="frame")
+        return 0
+
+    monkeypatch.setattr(interpolate, "run", command)
+    monkeypatch.setattr(warp, "run", command)
     assert cli.main(["interpolate", "--out", "nowhere"]) == 0
-    assert calls == [(("ibr.mesh._segment_kernels", "ibr.render._composite_kernels"), "frame")]
-    assert order == [("run", 1)]  # asked before the command ran
-    assert common.note_first_run("ibr.mesh._segment_kernels", "ibr.render._composite_kernels") is True
-    assert len(calls) == 1  # the command's own call: answered from the first, not said again
+    assert calls == [(interpolate.FRAME_KERNELS, "frame")] and order == [("run", 1)]  # asked before it ran
+    err = capsys.readouterr().err
+    assert err.count("compiling the numba kernels") == 1  # said once, by the command
     assert cli.main(["warp", "a.json", "--to", "b.json", "-o", "x.png", "--method", "forward"]) == 0
-    assert len(calls) == 1 and order[-1] == ("run", 1)
+    assert len(calls) == 1 and order[-1] == ("run", 1)  # no kernels of the mesh path
     assert cli.main(["warp", "a.json", "--to", "b.json", "-o", "x.png"]) == 0
-    assert order[-1] == ("run", 1)  # the same kernels as interpolate's: the helper is asked once per process
+    assert len(calls) == 2 and order[-1] == ("run", 2)  # a new command looks at the cache again
+    assert "compiling" not in capsys.readouterr().err  # the CLI's own ask is quiet
+
+
+def test_kernels_older_than_their_source_count_as_a_first_run(tmp_path, monkeypatch):
+    """A kernel module whose numba cache index is older than its source (an update) is compiled
+    again, so it counts as a first run (helper, and the summary says it compiled); a fresh index
+    does not."""
+    import commands._common as common
+
+    pkg = tmp_path / "kpkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    src = pkg / "_k_kernels.py"
+    src.write_text("X = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    assert common._stale_kernels("kpkg._k_kernels")  # no index
+    cache = pkg / "__pycache__"
+    cache.mkdir()
+    index = cache / "_k_kernels.f-1.py311.nbi"
+    index.write_bytes(b"")
+    os.utime(src, (1_000_000, 1_000_000))
+    os.utime(index, (2_000_000, 2_000_000))
+    assert not common._stale_kernels("kpkg._k_kernels")  # cached after the source was written
+    os.utime(src, (3_000_000, 3_000_000))
+    assert common._stale_kernels("kpkg._k_kernels")  # the source changed since
 
 
 def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, monkeypatch):
@@ -301,3 +335,18 @@ def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, 
         outs.append(np.load(out))
     assert np.array_equal(outs[0]["c"], outs[1]["c"])
     assert np.array_equal(outs[0]["z"], outs[1]["z"], equal_nan=True)
+
+
+@pytest.mark.parametrize("argv", [["interpolate", "{d}/a.json", "{d}/b.json", "--out", "{d}/o"],
+                                  ["warp", "{d}/a.json", "--to", "{d}/b.json", "-o", "{d}/o.png"],
+                                  ["mesh", "{d}/a.json", "--obj", "{d}/m.obj"]])
+def test_a_first_run_with_a_missing_input_says_only_the_error(tmp_path, monkeypatch, capsys, argv):
+    """On a first run (kernels to compile) a command whose input is missing prints its error and
+    nothing about compiling: the line comes after the inputs are read."""
+    import cli
+    import commands._common as common
+
+    monkeypatch.setattr(common, "_note_first_run", lambda modules, warm: True)
+    assert cli.main([a.format(d=tmp_path) for a in argv]) == 1
+    err = capsys.readouterr().err
+    assert "file not found" in err and "compiling" not in err
