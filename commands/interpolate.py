@@ -28,8 +28,9 @@ def add_arguments(parser) -> None:
                         help="output folder (default: %(default)s); frames of an earlier run there "
                              "(frame_NNN_tT.TTT.png/.exr, _holes.png) are replaced, other files are left alone")
     parser.add_argument("--fill", choices=("previous", "inpaint", "none"), default="previous",
-                        help="hole filling: previous frame (seed step 7, default), depth-aware "
-                             "background fill, or none")
+                        help="hole filling: the previous frame where it showed background there, else "
+                             "the background fill (seed step 7, default); the depth-aware background "
+                             "fill of each frame; or none")
     parser.add_argument("--method", choices=("mesh", "forward"), default="mesh",
                         help="quad-mesh inverse warp (default) or per-pixel forward splat (preview)")
     parser.add_argument("--interpolation", choices=("linear", "cubic"), default="linear",

@@ -331,7 +331,9 @@ def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, 
             subprocess.run([sys.executable, "-m", "ibr.render.warmup", "frame", str(marks)],
                            env={**env, "NUMBA_OPT": helper_opt}, check=True, timeout=300)
         out = tmp_path / f"{name}.npz"
-        subprocess.run([sys.executable, "-c", render, str(out)], env=env, check=True, timeout=300, cwd=ROOT)
+        compiled = _kernels_compiled_by(render.replace("sys.argv[1]", repr(str(out))), env)
+        if helper_opt:  # the render loaded the helper's -O2 kernels (it compiled none of them)
+            assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_segment_kernels._fit"))]
         outs.append(np.load(out))
     assert np.array_equal(outs[0]["c"], outs[1]["c"])
     assert np.array_equal(outs[0]["z"], outs[1]["z"], equal_nan=True)

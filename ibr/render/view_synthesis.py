@@ -597,9 +597,10 @@ def interpolate(
         Depth-aware blend of the two layers (default) or the seed's order (the source nearer to
         the new viewpoint in front, the other fills its holes).
     fill : {"previous", "inpaint", "background", "none"}
-        Holes left after compositing: the previous output frame (default; seed step 7; the first
-        frame, having none, gets the background pull-push), the background pull-push for every
-        frame (``"inpaint"``), issue 4's directional background fill, or nothing.
+        Holes left after compositing: the previous output frame where it showed background
+        there (default; seed step 7 with a depth test, :data:`ibr.render.fill.PREVIOUS_MIN_DEPTH`;
+        elsewhere, and in the first frame, the background pull-push), the background pull-push
+        for every frame (``"inpaint"``), issue 4's directional background fill, or nothing.
     depth_tol : float
         Relative depth tolerance under which both layers see the same surface.
     footprint, interpolation, splat, mesh_options, lod

@@ -140,8 +140,9 @@ def upconvert(
     factor : int
         F >= 1: F - 1 new frames between consecutive keys.
     fill : {"previous", "inpaint", "none"}
-        Holes left after compositing: the previous output frame across the whole sequence
-        (default, seed step 7), the depth-aware background fill of each frame, or nothing.
+        Holes left after compositing: the previous output frame across the whole sequence where
+        it showed background there (default, seed step 7 with a depth test; elsewhere the
+        background pull-push), the depth-aware background fill of each frame, or nothing.
     tail : bool
         Extrapolate F - 1 frames after the last key (default; keeps the clip's duration).
     method, composite_mode, interpolation, mesh_options, supersample
