@@ -203,7 +203,7 @@ def _check_dice_cells_empty(img: np.ndarray) -> None:
     if spread > DICE_EMPTY_MAX_SPREAD:
         raise ValueError(
             f"pano: a {w} x {h} (4:3) image is read as a dice cubemap only when its six unused cells are "
-            f"empty (one uniform colour); here they vary by {100 * spread:.1f}% of the value range (at most {100 * DICE_EMPTY_MAX_SPREAD:g}%), so it "
+            f"empty (one uniform colour); here they vary {spread:.2f} times as much as the faces (at most {DICE_EMPTY_MAX_SPREAD:g}), so it "
             f"looks like an ordinary picture. To read it as a dice anyway, give the layout: layout='dice' "
             f"(ibr cubemap --input-layout dice, ibr view --layout dice)")
 

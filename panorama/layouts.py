@@ -66,10 +66,11 @@ _TILES = {
     "dice": ((2, 1, 0), (0, 1, 0), (1, 2, 0), (1, 0, 0), (1, 1, 0), (3, 1, 0)),
 }
 _GRID = {"horizon": (6, 1), "vstrip": (1, 6), "dice": (4, 3)}  # (tiles across, tiles down)
-#: Largest :func:`dice_unused_spread` of an image auto-detected as a dice. The project's dice
-#: images give 0 (PNG) and 0.001 or less after a JPEG round trip (faces of 16-163 px); the 512 x 384
-#: photo ``samples/data/clutter_a_color.png`` gives 0.17.
-DICE_EMPTY_MAX_SPREAD = 0.02
+#: Largest :func:`dice_unused_spread` (the unused cells' spread over the faces') of an image
+#: auto-detected as a dice: the project's dice images give 0 (PNG) and a few hundredths at most
+#: after a JPEG round trip; photos about 1 (the value range no longer decides: an HDR photo with
+#: one bright highlight or 12-bit values in uint16 passed the earlier fraction-of-range test).
+DICE_EMPTY_MAX_SPREAD = 0.1
 #: Samples per side of each unused cell that :func:`dice_unused_spread` reads (a stride above).
 _SPREAD_SAMPLES = 256
 
@@ -90,7 +91,8 @@ def layout_shape(layout: str, face_size: int) -> tuple[int, int]:
 
 
 def dice_unused_spread(img) -> float:
-    """How far the six unused cells of a 4:3 image are from one uniform colour.
+    """How far the six unused cells of a 4:3 image are from one uniform colour, against how much
+    the six face cells vary (interquartile ranges).
 
     Parameters
     ----------
@@ -100,12 +102,13 @@ def dice_unused_spread(img) -> float:
     Returns
     -------
     float
-        The largest per-channel standard deviation of the unused cells' pixels, pooled over the
-        six cells, as a fraction of the value range: the dtype's for integers (255 for uint8),
-        the finite values' max - min for floats (0 when the image is constant). Each cell is read
+        The largest per-channel interquartile range of any unused cell's pixels over the largest
+        per-channel interquartile range of the face cells' pixels (pooled): 0
+        for the project's dice (unused cells 0), about 1 for a photo whose cells all hold
+        picture content (``clutter_a_color.png``, an HDR photo with a 1e4 highlight in a face,
+        12-bit noise in uint16), whatever the dtype, the value range or a few outliers. Each cell is read
         without a border of S // 8 pixels (JPEG ringing from the faces' edges) and with a stride
-        that keeps at most 256 samples a side. 0 for the project's dice (unused cells 0); 0.17
-        for a photo whose cells hold picture content (``clutter_a_color.png``).
+        that keeps at most 256 samples a side; an image without any variation gives 0.
     """
     img = check_image("pano", img)
     h, w = img.shape[:2]
@@ -114,31 +117,28 @@ def dice_unused_spread(img) -> float:
     s = h // 3
     m, step = s // 8, max(1, (s - 2 * (s // 8)) // _SPREAD_SAMPLES)
     used = {(col, row) for col, row, _ in _TILES["dice"]}
-    cells = [img[r * s + m:(r + 1) * s - m:step, c * s + m:(c + 1) * s - m:step]
-             for r in range(3) for c in range(4) if (c, r) not in used]
-    x = np.concatenate([c.reshape(-1, 1 if img.ndim == 2 else img.shape[2]) for c in cells]).astype(np.float64)
-    return float(np.max(_finite_std(x))) / _value_range(img[::step, ::step])
+    channels = 1 if img.ndim == 2 else img.shape[2]
+
+    def cells(keep):
+        return [img[r * s + m:(r + 1) * s - m:step, c * s + m:(c + 1) * s - m:step].reshape(-1, channels)
+                for r in range(3) for c in range(4) if ((c, r) in used) == keep]
+
+    # every unused cell on its own (one cell with content among five empty ones must count)
+    unused = max(float(np.max(_finite_iqr(c.astype(np.float64)))) for c in cells(False))
+    faces = float(np.max(_finite_iqr(np.concatenate(cells(True)).astype(np.float64))))
+    return unused / faces if faces > 0 else (0.0 if unused == 0 else float("inf"))
 
 
-def _finite_std(x: np.ndarray) -> np.ndarray:
-    """Per-column standard deviation of the finite values of ``x`` (N, C); 0 for a column without any."""
-    fin = np.isfinite(x)
-    n = np.maximum(fin.sum(axis=0), 1)
-    mean = np.where(fin, x, 0.0).sum(axis=0) / n
-    return np.sqrt(np.where(fin, (x - mean) ** 2, 0.0).sum(axis=0) / n)
-
-
-def _value_range(img: np.ndarray) -> float:
-    """The dtype's range for integers (and 1 for bool), else the finite values' max - min (inf
-    when there are none or they are all equal, so that any spread divided by it is 0)."""
-    if img.dtype.kind == "b":
-        return 1.0
-    if img.dtype.kind in "iu":
-        info = np.iinfo(img.dtype)
-        return float(info.max) - float(info.min)
-    vals = img[np.isfinite(img)]
-    span = float(vals.max()) - float(vals.min()) if vals.size else 0.0
-    return span if span > 0 else float("inf")
+def _finite_iqr(x: np.ndarray) -> np.ndarray:
+    """Per-column interquartile range of the finite values of ``x`` (N, C); 0 for a column
+    without any (robust: one bright highlight or a few outliers do not move it)."""
+    out = np.zeros(x.shape[1])
+    for c in range(x.shape[1]):
+        col = x[:, c][np.isfinite(x[:, c])]
+        if col.size:
+            q1, q3 = np.percentile(col, [25.0, 75.0])
+            out[c] = q3 - q1
+    return out
 
 
 def cube_face_size(cube, layout: str) -> int:

@@ -162,3 +162,23 @@ def _check_a_4x3_photo_is_refused(tmp_path):
     dice[32:48, 48:64] = photo[:16, :16]  # bottom-right cell
     with pytest.raises(ValueError, match=expected.replace("512 x 384", "64 x 48")):
         P.detect_layout(dice)
+
+
+@pytest.mark.parametrize("case", ["hdr highlight in a face", "hdr highlight in an unused cell", "12-bit in uint16"])
+def test_dice_detection_does_not_depend_on_the_value_range(case):
+    """The unused cells' spread is measured against the faces' (interquartile ranges), not the
+    value range: an HDR 4:3 photo with one 1e4 highlight (a spread of 3e-5 of its range) and
+    12-bit values stored in uint16 (1.8 % of the dtype's range) passed as dice before; a real
+    dice in those dtypes is still detected."""
+    rng = np.random.default_rng(1)
+    if case == "12-bit in uint16":
+        photo = rng.integers(0, 4096, (384, 512, 3), dtype=np.uint16)
+        faces = [rng.integers(0, 4096, (128, 128, 3), dtype=np.uint16) for _ in range(6)]
+    else:
+        photo = rng.random((384, 512, 3)).astype(np.float32)
+        photo[(200, 200) if "face" in case else (60, 60)] = 1e4  # (200, 200): the front face
+        faces = [rng.random((128, 128, 3)).astype(np.float32) for _ in range(6)]
+        faces[0][5, 5] = 1e4
+    with pytest.raises(ValueError, match="six unused cells are empty"):
+        P.detect_layout(photo)
+    assert P.detect_layout(P.pack_faces(faces, "dice")) == "dice"
