@@ -182,3 +182,22 @@ def test_dice_detection_does_not_depend_on_the_value_range(case):
     with pytest.raises(ValueError, match="six unused cells are empty"):
         P.detect_layout(photo)
     assert P.detect_layout(P.pack_faces(faces, "dice")) == "dice"
+
+
+def test_a_photo_of_flat_sky_and_flat_ground_is_no_dice():
+    """Each unused cell flat but of another colour (a sky above, a lawn below, a scene between)
+    is an ordinary 4:3 photo: the cells must also agree with each other. A real dice of tiny
+    blurred faces after JPEG 75 is still detected."""
+    import cv2
+
+    rng = np.random.default_rng(0)
+    img = np.empty((384, 512, 3))
+    img[:128] = np.array([235, 206, 135]) - 20 * np.linspace(0, 1, 384)[:128, None, None]
+    img[128:256] = rng.integers(0, 256, (128, 512, 3))
+    img[256:] = (70, 90, 80)
+    photo = np.clip(img + rng.normal(0, 2.0, img.shape), 0, 255).astype(np.uint8)
+    with pytest.raises(ValueError, match="six unused cells are empty"):
+        P.detect_layout(photo)
+    faces = [cv2.GaussianBlur(rng.integers(0, 256, (24, 24, 3)).astype(np.uint8), (0, 0), 1.5) for _ in range(6)]
+    ok, buf = cv2.imencode(".jpg", P.pack_faces(faces, "dice"), [cv2.IMWRITE_JPEG_QUALITY, 75])
+    assert P.detect_layout(cv2.imdecode(buf, cv2.IMREAD_COLOR)) == "dice"
