@@ -203,17 +203,39 @@ def _note_first_run(modules, warm: str) -> bool:
 
 def _stale_kernels(name: str) -> bool:
     """Whether kernel module ``name`` has no numba cache index, or only ones older than its
-    source (numba then compiles its kernels again)."""
+    source (numba then compiles its kernels again), in the folder numba caches it in
+    (:func:`_numba_cache_dir`). False when that cannot be told (a module in a zip file)."""
     import importlib.util
-    import os
 
     spec = importlib.util.find_spec(name)
     if spec is None or spec.origin is None:
         return False
     path = Path(spec.origin)
+    try:
+        source_time = path.stat().st_mtime
+        cache = _numba_cache_dir(path)
+        indexes = list(cache.glob(f"{path.stem}.*.nbi")) if cache is not None and cache.is_dir() else []
+        return not any(p.stat().st_mtime >= source_time for p in indexes)
+    except OSError:
+        return False
+
+
+def _numba_cache_dir(path: Path) -> Path | None:
+    """The folder numba's cache locators choose for the kernels of source file ``path``, in their
+    order: ``NUMBA_CACHE_DIR/<folder>_<sha1 of the folder>``, else ``__pycache__`` beside it when
+    that is writable, else numba's user-wide cache folder (``~/.cache/numba/<folder>_<sha1>`` on
+    Linux)."""
+    import hashlib
+    import os
+
+    folder = os.path.dirname(os.path.abspath(str(path)))
+    sub = f"{os.path.basename(folder)}_{hashlib.sha1(folder.encode()).hexdigest()}"
     cache_dir = os.environ.get("NUMBA_CACHE_DIR")
-    # numba's index files: __pycache__ beside the module, or <folder>_<hash>/ under NUMBA_CACHE_DIR
-    caches = [path.parent / "__pycache__"] if not cache_dir else list(Path(cache_dir).glob(f"{path.parent.name}_*"))
-    source_time = path.stat().st_mtime
-    indexes = [p for c in caches if c.is_dir() for p in c.glob(f"{path.stem}.*.nbi")]
-    return not any(p.stat().st_mtime >= source_time for p in indexes)
+    if cache_dir:
+        return Path(cache_dir) / sub
+    in_tree = Path(folder) / "__pycache__"
+    if (in_tree.is_dir() and os.access(in_tree, os.W_OK)) or (not in_tree.exists() and os.access(folder, os.W_OK)):
+        return in_tree
+    from numba.misc.appdirs import AppDirs  # numba's own choice of the user-wide folder
+
+    return Path(AppDirs(appname="numba", appauthor=False).user_cache_dir) / sub

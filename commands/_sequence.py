@@ -14,7 +14,7 @@ from __future__ import annotations
 import sys
 import time
 
-from commands._common import info
+from commands._common import info, note_first_run
 
 
 # --------------------------------------------------------------------------- progress
@@ -226,6 +226,10 @@ def run_interpolate(args) -> int:
                                 method=args.method, composite_mode=args.composite,
                                 interpolation=args.interpolation, supersample=args.supersample):
                 r = fr.rendering
+                if fr.index == 0:  # the first key read: now say whether numba compiles (cli.main asked)
+                    from commands.interpolate import FRAME_KERNELS
+
+                    note_first_run(*FRAME_KERNELS, warm="frame")
                 name = f"frame_{fr.index:04d}"
                 color = (_unit_float(r.color) if args.format == "exr" else _display(r.color))
                 write_image(plan.stage(out, name + ext), color)

@@ -352,3 +352,74 @@ def test_a_first_run_with_a_missing_input_says_only_the_error(tmp_path, monkeypa
     assert cli.main([a.format(d=tmp_path) for a in argv]) == 1
     err = capsys.readouterr().err
     assert "file not found" in err and "compiling" not in err
+
+
+def test_a_sequence_interpolation_says_it_compiles(tmp_path, monkeypatch, capsys):
+    """`ibr interpolate SEQ --factor F` on a first run: cli.main starts the helper quietly and the
+    sequence path says it compiles once its first key is read (it said nothing)."""
+    import cli
+    import commands._common as common
+    from ibr.io import load_view
+    from ibr.sequence.files import save_sequence
+    from samples import DATA_DIR
+
+    views = [load_view(DATA_DIR / "room_a.json"), load_view(DATA_DIR / "room_b.json")]
+    seq = save_sequence(views, tmp_path / "walk.json", fps=10)
+    monkeypatch.setattr(common, "_note_first_run", lambda modules, warm: True)
+    assert cli.main(["interpolate", str(seq), "--factor", "2", "--out", str(tmp_path / "f")]) == 0
+    assert capsys.readouterr().err.count("compiling the numba kernels") == 1
+
+
+def test_the_first_run_check_looks_where_numba_caches(tmp_path, monkeypatch):
+    """The kernel cache folder is numba's own choice (tests compare with its locators): under
+    NUMBA_CACHE_DIR the folder named after this checkout's module folder (another checkout's
+    index there does not count), ``__pycache__`` when it is usable, else the user-wide folder
+    (an index there counted for nothing: every warm run started the helper and said compiling)."""
+    import hashlib
+
+    import commands._common as common
+    import numba.core.caching as caching
+
+    pkg = tmp_path / "kpkg2"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    src = pkg / "_k_kernels.py"
+    src.write_text("def f():\n    return 1\n")
+    os.utime(src, (1_000_000, 1_000_000))
+    monkeypatch.syspath_prepend(str(tmp_path))
+
+    def numba_choice():
+        import importlib
+
+        mod = importlib.import_module("kpkg2._k_kernels")
+        for cls in caching.CacheImpl._locator_classes:
+            loc = cls.from_function(mod.f, mod.__file__)
+            if loc is not None:
+                return Path(loc.get_cache_path())
+
+    cache = tmp_path / "nbcache"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    import numba
+
+    numba.config.reload_config()
+    try:
+        assert common._numba_cache_dir(src) == numba_choice()
+        other = cache / f"kpkg2_{hashlib.sha1(b'/elsewhere/kpkg2').hexdigest()}"
+        other.mkdir(parents=True)
+        (other / "_k_kernels.f-1.py311.nbi").write_bytes(b"")
+        assert common._stale_kernels("kpkg2._k_kernels")  # another checkout's index
+        mine = common._numba_cache_dir(src)
+        mine.mkdir(parents=True, exist_ok=True)
+        (mine / "_k_kernels.f-1.py311.nbi").write_bytes(b"")
+        assert not common._stale_kernels("kpkg2._k_kernels")
+    finally:
+        monkeypatch.delenv("NUMBA_CACHE_DIR")
+        numba.config.reload_config()
+    assert common._numba_cache_dir(src) == numba_choice() == pkg / "__pycache__"
+    shutil.rmtree(pkg / "__pycache__", ignore_errors=True)
+    (pkg / "__pycache__").write_text("not a folder")  # in-tree unusable: numba goes user-wide
+    user_wide = numba_choice()  # numba made this folder to test it: remove it again
+    try:
+        assert common._numba_cache_dir(src) == user_wide != pkg / "__pycache__"
+    finally:
+        shutil.rmtree(user_wide, ignore_errors=True)
