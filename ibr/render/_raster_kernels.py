@@ -229,7 +229,7 @@ def _bucket(bbox, rows_per_band, count, fill, quads):
 
 
 def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_start, band_quads, far_coord,
-                  crack_rel, src_inv, depth, map_u, map_v, coverage):
+                  crack_rel, src_qop, src_planes, depth, map_u, map_v, coverage):
     """Z-buffered rasterization of quads into source-coordinate maps, one band of target rows
     per parallel task (each band owns its rows: no write races).
 
@@ -243,8 +243,8 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
     takes their mean map coordinates and the mean of their inverse depths (two neighbouring
     quads of a curved surface have different planes, so their shared edge can open by a pixel
     in another view), if the source pixel at those mean coordinates lies on the neighbours'
-    surface too (``src_inv`` (H_s, W_s) float32: the mesh's inverse depth per source pixel, 0
-    where none): behind a one-pixel pole the wall's two sides agree, but halfway between their
+    surface too (the source mesh's ``src_qop`` quad of each pixel and ``src_planes`` inverse-depth
+    planes): behind a one-pixel pole the wall's two sides agree, but halfway between their
     samples is the pole; 0 leaves them.
     """
     nbands = band_start.shape[0] - 1
@@ -341,39 +341,45 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
                 murow[u] = murow[u] if cov else far_coord
                 mvrow[u] = mvrow[u] if cov else far_coord
             if crack_rel > 0.0:
-                _close_row_cracks(drow, crow, murow, mvrow, width, crack_rel, src_inv)
+                _close_row_cracks(drow, crow, murow, mvrow, width, crack_rel, src_qop, src_planes)
 
 
 @njit(cache=True, error_model="numpy")
-def _src_inv_at(src_inv, x, y):
-    """The source's inverse depth at the nearest pixel of (x, y), clamped to the image."""
-    h, w = src_inv.shape
-    return src_inv[min(max(int(np.floor(y + 0.5)), 0), h - 1), min(max(int(np.floor(x + 0.5)), 0), w - 1)]
+def _src_inv_at(qop, planes, x, y):
+    """The source mesh's inverse depth at the nearest pixel of (x, y) (clamped to the image): its
+    quad's plane there, 0 where no quad covers it."""
+    h, w = qop.shape
+    v = min(max(int(np.floor(y + 0.5)), 0), h - 1)
+    u = min(max(int(np.floor(x + 0.5)), 0), w - 1)
+    q = qop[v, u]
+    if q < 0:
+        return 0.0
+    return planes[q, 0] * u + planes[q, 1] * v + planes[q, 2]
 
 
 @njit(cache=True, error_model="numpy")
-def _crack_between(za, zb, ua, va, ub, vb, rel, src_inv):
+def _crack_between(za, zb, ua, va, ub, vb, rel, qop, planes):
     """Whether the gap between two covered target pixels (depths za, zb; source coordinates
     (ua, va), (ub, vb)) is a crack of one surface: their depths agree within ``rel`` and the
     source pixel halfway between their samples lies on that surface in the source (its inverse
     depth within ``rel`` of both samples'), not on a thin object in front of it."""
     if not (abs(za - zb) <= rel * min(za, zb)):
         return False
-    qa = _src_inv_at(src_inv, ua, va)
-    qb = _src_inv_at(src_inv, ub, vb)
-    qm = _src_inv_at(src_inv, 0.5 * (ua + ub), 0.5 * (va + vb))
+    qa = _src_inv_at(qop, planes, ua, va)
+    qb = _src_inv_at(qop, planes, ub, vb)
+    qm = _src_inv_at(qop, planes, 0.5 * (ua + ub), 0.5 * (va + vb))
     return qm > 0.0 and abs(qm - qa) <= rel * max(qm, qa) and abs(qm - qb) <= rel * max(qm, qb)
 
 
 @njit(cache=True, error_model="numpy")
-def _close_row_cracks(drow, crow, murow, mvrow, width, rel, src_inv):
+def _close_row_cracks(drow, crow, murow, mvrow, width, rel, qop, planes):
     """One-pixel cracks of one target row closed (see :func:`_raster_quads`, ``crack_rel``)."""
     for u in range(1, width - 1):
         if crow[u] or not (crow[u - 1] and crow[u + 1]):
             continue
         zl = drow[u - 1]
         zr = drow[u + 1]
-        if _crack_between(zl, zr, murow[u - 1], mvrow[u - 1], murow[u + 1], mvrow[u + 1], rel, src_inv):
+        if _crack_between(zl, zr, murow[u - 1], mvrow[u - 1], murow[u + 1], mvrow[u + 1], rel, qop, planes):
             drow[u] = 2.0 / (1.0 / zl + 1.0 / zr)
             murow[u] = 0.5 * (murow[u - 1] + murow[u + 1])
             mvrow[u] = 0.5 * (mvrow[u - 1] + mvrow[u + 1])
@@ -381,7 +387,7 @@ def _close_row_cracks(drow, crow, murow, mvrow, width, rel, src_inv):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def close_column_cracks(v0, v1, depth, coverage, map_u, map_v, rel, before, src_inv):
+def close_column_cracks(v0, v1, depth, coverage, map_u, map_v, rel, before, qop, planes):
     """One-pixel cracks along columns, rows ``v0 .. v1-1``: an uncovered pixel between two covered
     column neighbours whose depths agree within ``rel`` of the nearer, and halfway between whose
     source samples the source shows the same surface (:func:`_crack_between`), takes their mean
@@ -399,7 +405,7 @@ def close_column_cracks(v0, v1, depth, coverage, map_u, map_v, rel, before, src_
             za = depth[v - 1, u]
             zb = depth[v + 1, u]
             if _crack_between(za, zb, map_u[v - 1, u], map_v[v - 1, u], map_u[v + 1, u], map_v[v + 1, u], rel,
-                              src_inv):
+                              qop, planes):
                 depth[v, u] = 2.0 / (1.0 / za + 1.0 / zb)
                 map_u[v, u] = 0.5 * (map_u[v - 1, u] + map_u[v + 1, u])
                 map_v[v, u] = 0.5 * (map_v[v - 1, u] + map_v[v + 1, u])

@@ -139,20 +139,12 @@ def _mesh_inv_depth(mesh) -> np.ndarray:
     return inv
 
 
-_inv_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-_NO_SOURCE = np.zeros((1, 1), np.float32)  # src_inv when no crack is closed: read-only like the
-_NO_SOURCE.setflags(write=False)           # cached ones, so the kernel has one signature
-
-
-def _source_inv_depth(mesh) -> np.ndarray:
-    """(H, W) float32 :func:`_mesh_inv_depth` of ``mesh``, read-only, cached per mesh (the crack
-    closing's test of the source surface)."""
-    inv = _inv_cache.get(mesh)
-    if inv is None:
-        inv = _mesh_inv_depth(mesh).astype(np.float32)
-        inv.setflags(write=False)
-        _inv_cache[mesh] = inv
-    return inv
+# the source-surface arguments of the raster kernel when no crack is closed: read-only like a
+# mesh's own arrays, so that the kernel has one signature either way
+_NO_QOP = np.full((1, 1), -1, np.int32)
+_NO_PLANES = np.zeros((1, 3), np.float64)
+for _a in (_NO_QOP, _NO_PLANES):
+    _a.setflags(write=False)
 
 
 def _clamp_flags(mesh, footprint: str, depth_tol: float) -> np.ndarray:
@@ -240,9 +232,9 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
                   h, coef, bbox, min_rows=4096)  # quads: a piece per thread from 8192 quads on
         flags = _clamp_flags(mesh, footprint, depth_tol)
         start, order = _k.bucket_bands(bbox, h, _nbands(h))
-        src_inv = _source_inv_depth(mesh) if crack_rel > 0 else _NO_SOURCE
+        surface = (mesh.quad_of_pixel, mesh.inv_depth_planes) if crack_rel > 0 else (_NO_QOP, _NO_PLANES)
         jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, _FAR,
-                                             float(crack_rel), src_inv, out.depth, out.map_u, out.map_v,
+                                             float(crack_rel), *surface, out.depth, out.map_u, out.map_v,
                                              out.coverage)))
         first += len(start) - 1
 
@@ -260,7 +252,7 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
         def columns(v0, v1):  # rows v0 .. v1-1 of every output, one dispatch of the pool
             for mesh, out, cov in zip(meshes, outs, before):
                 _k.close_column_cracks(v0, v1, out.depth, out.coverage, out.map_u, out.map_v, float(crack_rel), cov,
-                                       _source_inv_depth(mesh))
+                                       mesh.quad_of_pixel, mesh.inv_depth_planes)
 
         run_bands(columns, h, min_rows=64 if h * w >= _PARALLEL_PIXELS else h)
     return outs
