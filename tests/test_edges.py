@@ -562,12 +562,13 @@ def _two_quad_step(axis, t, w=200, h=200):
 
 
 @pytest.mark.parametrize("axis", [0, 1])
-def test_a_one_pixel_crack_along_rows_and_columns_is_closed_and_a_wider_gap_is_not(axis):
-    """The shared edge of two quads 1.5 % apart in depth opens into a one-pixel line (a row of
-    pixels for a horizontal edge, closed by the column pass; a column for a vertical one, closed
-    by the raster kernel's row pass) when the camera moves across it; view synthesis's crack
-    closing fills exactly that line, at a depth between the two planes', the same on every run
-    (two threads, row bands); a gap of several pixels (a larger move) stays open."""
+def test_a_one_pixel_crack_along_rows_is_closed_and_a_wider_gap_is_not(axis):
+    """The shared edge of two quads 1.5 % apart in depth opens into a one-pixel line when the
+    camera moves across it. A vertical edge (``axis`` 1) opens a column of one-pixel gaps along
+    the rows: view synthesis's crack closing fills exactly that line, at a depth between the two
+    planes', the same on every run (two threads, row bands). A horizontal edge (0, vertical
+    parallax) opens a row of gaps along the columns: left to the fill (a column pass cost 6 %
+    of a warp for +0.04 dB). A gap of several pixels (a larger move) stays open."""
     from ibr.render.rasterize import CRACK_REL, SourceMaps, _rasterize_many_into
 
     def render(mesh, cam, rel):
@@ -584,7 +585,11 @@ def test_a_one_pixel_crack_along_rows_and_columns_is_closed_and_a_wider_gap_is_n
         inner[1:-1] = ~cov[1:-1] & cov[:-2] & cov[2:]
     else:
         inner[:, 1:-1] = ~cov[:, 1:-1] & cov[:, :-2] & cov[:, 2:]
-    assert inner.sum() == 200 and np.array_equal(line, inner)  # the whole one-pixel line, nothing else
+    assert inner.sum() == 200  # the one-pixel line is there
+    if axis == 0:
+        assert not line.any()
+        return
+    assert np.array_equal(line, inner)  # the whole one-pixel line, nothing else
     assert ((closed.depth[line] > 2.0 - 1e-3) & (closed.depth[line] < 2.0 / 0.985 + 1e-3)).all()
     again = render(mesh, cam, CRACK_REL)
     for name in ("depth", "map_u", "map_v", "coverage"):
@@ -597,9 +602,9 @@ def test_a_one_pixel_crack_along_rows_and_columns_is_closed_and_a_wider_gap_is_n
     assert np.array_equal(wide.coverage, wide_exact.coverage)
 
 
-@pytest.mark.parametrize("axis", [0, 1])
+@pytest.mark.parametrize("axis", [1])
 def test_the_gap_behind_a_one_pixel_pole_is_no_crack(axis):
-    """Behind a one-pixel pole (or wire, ``axis`` 0) the wall on both sides of its disocclusion
+    """Behind a one-pixel pole the wall on both sides of its disocclusion
     agrees in depth, but halfway between the two wall samples the source shows the pole: crack
     closing drew the pole's colour there at the wall's depth (224 levels off). The source surface
     test leaves that gap a hole, for the fill: the wall's colour within its texture's 30 levels."""

@@ -386,32 +386,6 @@ def _close_row_cracks(drow, crow, murow, mvrow, width, rel, qop, planes):
             crow[u] = True
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
-def close_column_cracks(v0, v1, depth, coverage, map_u, map_v, rel, before, qop, planes):
-    """One-pixel cracks along columns, rows ``v0 .. v1-1``: an uncovered pixel between two covered
-    column neighbours whose depths agree within ``rel`` of the nearer, and halfway between whose
-    source samples the source shows the same surface (:func:`_crack_between`), takes their mean
-    map coordinates and inverse depth (:func:`_raster_quads` closes the row cracks). Decided on
-    ``before``, the coverage as the raster left it, so that row bands on other threads, which
-    write only pixels uncovered there, never change what a band reads: deterministic."""
-    h, w = before.shape
-    for v in range(max(v0, 1), min(v1, h - 1)):
-        up = before[v - 1]
-        row = before[v]
-        dn = before[v + 1]
-        for u in range(w):
-            if row[u] or not (up[u] and dn[u]):
-                continue
-            za = depth[v - 1, u]
-            zb = depth[v + 1, u]
-            if _crack_between(za, zb, map_u[v - 1, u], map_v[v - 1, u], map_u[v + 1, u], map_v[v + 1, u], rel,
-                              qop, planes):
-                depth[v, u] = 2.0 / (1.0 / za + 1.0 / zb)
-                map_u[v, u] = 0.5 * (map_u[v - 1, u] + map_u[v + 1, u])
-                map_v[v, u] = 0.5 * (map_v[v - 1, u] + map_v[v + 1, u])
-                coverage[v, u] = True
-
-
 #: Bands ``band0 .. band1-1`` without the GIL: :func:`ibr.render.bands.run_bands` runs bands on all
 #: cores (compiled serially: a third of the parallel=True compile time, #13)
 raster_quads = njit(cache=True, error_model="numpy", nogil=True)(_raster_quads)

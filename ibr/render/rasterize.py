@@ -39,14 +39,16 @@ __all__ = ["FOOTPRINTS", "INTERPOLATIONS", "Layer", "SourceMaps", "rasterize_mes
 #: Sample-footprint modes of :func:`render_mesh` ("free" measured best, see README section render).
 FOOTPRINTS = ("free", "surface", "quad", "none")
 
-#: One-pixel cracks along a row or a column of a source's rendering (view synthesis:
+#: One-pixel cracks along a row of a source's rendering (view synthesis:
 #: ``_rasterize_many_into(..., crack_rel=CRACK_REL)``), between two pixels within this relative
 #: depth of each other, are closed before compositing (two neighbouring quads of a curved surface
 #: have different planes, so their shared edge opens by a pixel in another view; where the other
 #: source sees the background there it showed through, e.g. a jagged orange line along clutter's
 #: dark sphere at t = 0.5, #11). Measured (bench_edges, after the fill): clutter all pixels
-#: 36.82 -> 36.84 dB, band 28.27 -> 28.32; room 38.34 -> 38.34 / 30.98 -> 31.02 (the column
-#: cracks: +0.04 of it); 0.05 cost room's band 0.02 dB, 0.01 left a third of the cracks open.
+#: 36.82 -> 36.84 dB, band 28.27 -> 28.31; room unchanged. Closing the cracks along columns too
+#: (a second pass on a snapshot of the coverage) added room's band +0.04 dB for 0.2 ms more on
+#: the motorcycle's warp (6 %): not kept. 0.05 cost room's band 0.02 dB, 0.01 left a third of
+#: the cracks open.
 CRACK_REL = 0.02
 
 #: Color reconstruction filters of :func:`sample_maps`.
@@ -210,9 +212,9 @@ def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out:
 def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: float, outs, crack_rel: float = 0.0) -> list:
     """:func:`_rasterize_into` for several meshes into the same camera, their bands of rows run
     in one pass of the band pool (one dispatch, and the pieces of all meshes balance out).
-    ``crack_rel`` > 0: one-pixel cracks along rows, then along columns, between same-surface
-    pixels are closed (``_raster_kernels.raster_quads`` and ``close_column_cracks``; view
-    synthesis, not the exact coverage of :func:`rasterize_mesh`)."""
+    ``crack_rel`` > 0: one-pixel cracks along rows between same-surface pixels are closed
+    (``_raster_kernels.raster_quads``; view synthesis, not the exact coverage of
+    :func:`rasterize_mesh`)."""
     check_choice("footprint", footprint, FOOTPRINTS)
     depth_tol = check_positive("depth_tol", depth_tol)
     if not isinstance(camera, Camera):
@@ -246,15 +248,6 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
 
     run_bands(bands, first, min_rows=1 if h * w >= _PARALLEL_PIXELS else first,
               pieces_per_thread=4 * len(jobs))  # quads crowd some bands: balance them
-    if crack_rel > 0:  # the row cracks closed in the bands above; now the column cracks
-        before = [out.coverage.copy() for out in outs]
-
-        def columns(v0, v1):  # rows v0 .. v1-1 of every output, one dispatch of the pool
-            for mesh, out, cov in zip(meshes, outs, before):
-                _k.close_column_cracks(v0, v1, out.depth, out.coverage, out.map_u, out.map_v, float(crack_rel), cov,
-                                       mesh.quad_of_pixel, mesh.inv_depth_planes)
-
-        run_bands(columns, h, min_rows=64 if h * w >= _PARALLEL_PIXELS else h)
     return outs
 
 

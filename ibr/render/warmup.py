@@ -56,7 +56,7 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     mesh = _tiny_mesh()
     moved = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h,
                    np.array([[1, 0, 0, 0.3], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]))
-    # as view synthesis rasterizes: with its crack closing (the column pass is a kernel of its own)
+    # as view synthesis rasterizes: with its crack closing
     _rasterize_many_into([mesh], moved, "free", 0.01, [scratch_maps("warm", moved.shape)], crack_rel=CRACK_REL)
     _mark(marks, "raster")
     color = np.full((h, w, 3), 128, np.uint8)
