@@ -141,12 +141,10 @@ def _mesh_inv_depth(mesh) -> np.ndarray:
     return inv
 
 
-# the source-surface arguments of the raster kernel when no crack is closed: read-only like a
-# mesh's own arrays, so that the kernel has one signature either way
+# the source-quad argument of the raster kernel when no crack is closed: read-only like a mesh's
+# own, so that the kernel has one signature either way
 _NO_QOP = np.full((1, 1), -1, np.int32)
-_NO_PLANES = np.zeros((1, 3), np.float64)
-for _a in (_NO_QOP, _NO_PLANES):
-    _a.setflags(write=False)
+_NO_QOP.setflags(write=False)
 
 
 def _clamp_flags(mesh, footprint: str, depth_tol: float) -> np.ndarray:
@@ -234,9 +232,9 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
                   h, coef, bbox, min_rows=4096)  # quads: a piece per thread from 8192 quads on
         flags = _clamp_flags(mesh, footprint, depth_tol)
         start, order = _k.bucket_bands(bbox, h, _nbands(h))
-        surface = (mesh.quad_of_pixel, mesh.inv_depth_planes) if crack_rel > 0 else (_NO_QOP, _NO_PLANES)
+        qop = mesh.quad_of_pixel if crack_rel > 0 else _NO_QOP
         jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, _FAR,
-                                             float(crack_rel), *surface, out.depth, out.map_u, out.map_v,
+                                             float(crack_rel), qop, out.depth, out.map_u, out.map_v,
                                              out.coverage)))
         first += len(start) - 1
 
