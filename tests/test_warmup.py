@@ -43,22 +43,22 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     marks = tmp_path / "marks"
     marks.mkdir()
     subprocess.run([sys.executable, "-m", "ibr.render.warmup", "frame", str(marks)], env=env, check=True, timeout=300)
-    assert sorted(p.name for p in marks.iterdir()) == ["fill", "plane-fit", "raster"]  # each group marked once cached
+    assert sorted(p.name for p in marks.iterdir()) == ["fill", "raster"]  # each group marked once cached
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push",
-            "_fill_kernels.axis_background", "_segment_kernels._fit_planes_kernel"} <= cached
-    # the split is the main process's (it reaches it first); the plane fit's moments it shares
-    assert {n for n in cached if n.startswith("_segment_kernels")} == {"_segment_kernels._fit_planes_kernel",
-                                                                      "_segment_kernels._rect_moments"}
+            "_fill_kernels.axis_background"} <= cached
+    # the segmentation and the plane fit are the main process's (it reaches them first)
+    assert not {n for n in cached if n.startswith("_segment_kernels")}
     compiled = _kernels_compiled_by(
         "from ibr.io import load_view\n"
         "from ibr.render.view_synthesis import interpolate\n"
         "from samples import DATA_DIR\n"
         "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
         "interpolate(a, b, 0.5, fill='inpaint')\n", env)
-    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_segment_kernels._fit"))]
-    # the main process's share: the segmentation's edge prefix and split, and the compositor
-    assert {"_segment_kernels._split_edges_kernel", "_composite_kernels.composite_rgbt"} <= set(compiled)
+    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels"))]
+    # the main process's share: the segmentation's edge prefix, split and plane fit, the compositor
+    assert {"_segment_kernels._split_edges_kernel", "_segment_kernels._fit_planes_kernel",
+            "_composite_kernels.composite_rgbt"} <= set(compiled)
 
 
 def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):
@@ -286,7 +286,7 @@ def test_kernels_older_than_their_source_count_as_a_first_run(tmp_path, monkeypa
 def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, monkeypatch):
     """start_helper runs the "frame" helper with NUMBA_OPT=2 (its kernels compile faster and run
     as fast; a user's NUMBA_OPT wins; the other helpers keep numba's default), and a frame
-    rendered from kernels the O2 helper cached (the plane fit, the rasterizer, the fill) is
+    rendered from kernels the O2 helper cached (the rasterizer, the fill) is
     bit-identical to one whose kernels were all compiled at the default level."""
     import ibr.base.first_run as fr
 
@@ -333,7 +333,7 @@ def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, 
         out = tmp_path / f"{name}.npz"
         compiled = _kernels_compiled_by(render.replace("sys.argv[1]", repr(str(out))), env)
         if helper_opt:  # the render loaded the helper's -O2 kernels (it compiled none of them)
-            assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_segment_kernels._fit"))]
+            assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels"))]
         outs.append(np.load(out))
     assert np.array_equal(outs[0]["c"], outs[1]["c"])
     assert np.array_equal(outs[0]["z"], outs[1]["z"], equal_nan=True)
