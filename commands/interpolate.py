@@ -266,7 +266,8 @@ def run(args) -> int:
         from ibr.render.view_synthesis import iter_interpolate, source_mesh
 
         view_a, view_b = load_view(path_a), load_view(path_b)
-        note_first_run(*modules, warm=warm)  # the inputs read: now say that numba compiles
+        if view_a.depth is not None and view_b.depth is not None:  # (else refused at once, silently)
+            note_first_run(*modules, warm=warm)  # the inputs read: now say that numba compiles
 
         if args.method == "mesh" and args.supersample == 1:  # supersampled: meshes of the upsampled
             t0 = time.perf_counter()                           # sources, built with the first frame

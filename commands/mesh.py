@@ -70,7 +70,8 @@ def run(args) -> int:
         from ibr.mesh.quad_mesh import build_mesh  # after the helper's start (numba: 0.3 s)
 
         view = load_view(args.view)
-        note_first_run(*modules, warm=warm)  # the input read: now say that numba compiles
+        if view.depth is not None:  # (else refused at once, silently)
+            note_first_run(*modules, warm=warm)  # the input read: now say that numba compiles
         if viz:
             check_image_size("--viz-scale", view.shape[1] * args.viz_scale, view.shape[0] * args.viz_scale,
                              channels=3, itemsize=1)

@@ -88,8 +88,8 @@ def run(args) -> int:
 
         view = load_view(args.view)
         target = load_camera(args.to)
-        if kernels is not None:  # the inputs read: now say that numba compiles
-            note_first_run(*kernels[0], warm=kernels[1])
+        if kernels is not None and view.depth is not None:  # the inputs read (a view without depth is
+            note_first_run(*kernels[0], warm=kernels[1])     # refused at once): say that numba compiles
         if args.method == "mesh" and view.depth is not None and args.supersample == 1:
             t0 = time.perf_counter()
             mesh = source_mesh(view)

@@ -423,3 +423,21 @@ def test_the_first_run_check_looks_where_numba_caches(tmp_path, monkeypatch):
         assert common._numba_cache_dir(src) == user_wide != pkg / "__pycache__"
     finally:
         shutil.rmtree(user_wide, ignore_errors=True)
+
+
+def test_a_first_run_with_a_view_without_depth_says_only_the_error(tmp_path, monkeypatch, capsys):
+    """A view file without depth is refused before any kernel runs; on a first run the command
+    said "compiling" first."""
+    import cli
+    import commands._common as common
+    from ibr.io import load_view, save_view
+    from ibr.base.view import View
+    from samples import DATA_DIR
+
+    v = load_view(DATA_DIR / "room_a.json")
+    save_view(View(v.color, None, v.camera, "flat"), tmp_path / "flat.json")
+    monkeypatch.setattr(common, "_note_first_run", lambda modules, warm: True)
+    code = cli.main(["warp", str(tmp_path / "flat.json"), "--to", str(DATA_DIR / "room_b.json"), "-o",
+                     str(tmp_path / "o.png")])
+    err = capsys.readouterr().err
+    assert code == 1 and "depth" in err and "compiling" not in err
