@@ -260,14 +260,14 @@ def run(args) -> int:
         video = plan.add_file("--video", args.video, VIDEO_EXTS)
         sheet = plan.add_file("--contact-sheet", args.contact_sheet, (".png", ".jpg", ".jpeg", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
-        modules, warm = first_run_kernels(args)
-        compiling = note_first_run(*modules, warm=warm, announce=False)  # (cli.main started the helper)
-        # imported after the first-run helper has started: numba's import (0.3 s) then overlaps it
+        # imported after cli.main started the first-run helper: numba's import (0.3 s) overlaps it
         from ibr.render.view_synthesis import iter_interpolate, source_mesh
 
         view_a, view_b = load_view(path_a), load_view(path_b)
-        if view_a.depth is not None and view_b.depth is not None:  # (else refused at once, silently)
-            note_first_run(*modules, warm=warm)  # the inputs read: now say that numba compiles
+        # the inputs read: say that numba compiles (not before a view without depth is refused)
+        modules, warm = first_run_kernels(args)
+        with_depth = view_a.depth is not None and view_b.depth is not None
+        compiling = note_first_run(*modules, warm=warm, announce=with_depth)
 
         if args.method == "mesh" and args.supersample == 1:  # supersampled: meshes of the upsampled
             t0 = time.perf_counter()                           # sources, built with the first frame

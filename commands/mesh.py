@@ -65,13 +65,12 @@ def run(args) -> int:
         if obj:
             mtl = plan.add_file("--obj (its material file)", obj.with_suffix(".mtl"), (".mtl",))
         plan.check()  # every output checked before any work (#12)
-        modules, warm = first_run_kernels(args)
-        note_first_run(*modules, warm=warm, announce=False)  # (cli.main started the helper)
-        from ibr.mesh.quad_mesh import build_mesh  # after the helper's start (numba: 0.3 s)
+        from ibr.mesh.quad_mesh import build_mesh  # after cli.main started the helper (numba: 0.3 s)
 
         view = load_view(args.view)
-        if view.depth is not None:  # (else refused at once, silently)
-            note_first_run(*modules, warm=warm)  # the input read: now say that numba compiles
+        # the input read: say that numba compiles (not before a view without depth is refused)
+        modules, warm = first_run_kernels(args)
+        note_first_run(*modules, warm=warm, announce=view.depth is not None)
         if viz:
             check_image_size("--viz-scale", view.shape[1] * args.viz_scale, view.shape[0] * args.viz_scale,
                              channels=3, itemsize=1)

@@ -178,10 +178,9 @@ def _run_sequences(args) -> int:
         folder = plan.add_folder("-o", args.output, ("pano_#.png",) + (("pano_#_depth.exr",) if depth else ()))
         plan.check()
         modules, warm = first_run_kernels(args)
-        note_first_run(*modules, warm=warm, announce=False)  # (cli.main started the helper)
         for k in progress(range(frames), frames, "stitch frames"):
             views = [load_view(s.views[k]) for s in seqs]
-            note_first_run(*modules, warm=warm)  # the first inputs read: now say that numba compiles (once)
+            note_first_run(*modules, warm=warm)  # the first inputs read: say that numba compiles (once)
             packed, z, holes, seen = _stitch_frame(args, views, None, None)
             _write(plan, plan.stage(folder, f"pano_{k:04d}.png"),
                    plan.stage(folder, f"pano_{k:04d}_depth.exr") if depth else None, None, packed, z, holes)
@@ -216,8 +215,6 @@ def run(args) -> int:
                                                               tuple(e for e in DEPTH_EXTS if e != ".png"))
         holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
         plan.check()  # every output checked before any work
-        modules, warm = first_run_kernels(args)
-        note_first_run(*modules, warm=warm, announce=False)  # (cli.main started the helper)
 
         if args.panorama:
             panorama = (read_image(args.panorama[0], what="--panorama COLOR"),
@@ -226,7 +223,8 @@ def run(args) -> int:
         else:
             panorama, views = None, [load_view(p) for p in args.views]
             n = len(views)
-        note_first_run(*modules, warm=warm)  # the inputs read: now say that numba compiles
+        modules, warm = first_run_kernels(args)
+        note_first_run(*modules, warm=warm)  # the inputs read: say that numba compiles
         steps = n * (2 if args.stereo == "ods" else 1)
         bar = progress(range(steps), steps, "stitch")
         next(bar)  # the bar prints step k when asked for item k + 1 (one step per rendered view)

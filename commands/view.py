@@ -34,8 +34,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--roll", type=finite_float, default=0.0, help="degrees, camera turned clockwise")
     parser.add_argument("--fov", type=number_in(0, 180, lo_open=True, hi_open=True, what="an angle"), default=90.0,
                         help="horizontal field of view, degrees (0 < fov < 180; default: %(default)s)")
-    parser.add_argument("--width", type=image_side, default=1280, help="output width in pixels (default: %(default)s)")
-    parser.add_argument("--height", type=image_side, default=720, help="output height in pixels (default: %(default)s)")
+    parser.add_argument("--width", type=image_side, default=1280,
+                        help="output width in pixels (default: %(default)s)")
+    parser.add_argument("--height", type=image_side, default=720,
+                        help="output height in pixels (default: %(default)s)")
     parser.add_argument("--tour", type=frame_count, default=None, metavar="N",
                         help="write N frames turning once around (yaw from --yaw)")
     parser.add_argument("--fps", type=frame_rate, default=12.0, help="tour frame rate (GIF/mp4)")

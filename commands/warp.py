@@ -81,15 +81,14 @@ def run(args) -> int:
         depth_out = plan.add_file("--depth-out", args.depth_out, (".exr", ".tif", ".tiff", ".pfm"))
         holes_out = plan.add_file("--holes-out", args.holes_out, (".png", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
-        kernels = first_run_kernels(args)
-        if kernels is not None:  # the helper compiles raster and fill (cli.main started it already)
-            note_first_run(*kernels[0], warm=kernels[1], announce=False)
-        from ibr.render.view_synthesis import source_mesh, warp  # after the helper's start (numba: 0.3 s)
+        from ibr.render.view_synthesis import source_mesh, warp  # after cli.main started the helper
 
         view = load_view(args.view)
         target = load_camera(args.to)
-        if kernels is not None and view.depth is not None:  # the inputs read (a view without depth is
-            note_first_run(*kernels[0], warm=kernels[1])     # refused at once): say that numba compiles
+        kernels = first_run_kernels(args)
+        if kernels is not None:  # the inputs read: say that numba compiles (not before a view
+            modules, warm = kernels  # without depth is refused)
+            note_first_run(*modules, warm=warm, announce=view.depth is not None)
         if args.method == "mesh" and view.depth is not None and args.supersample == 1:
             t0 = time.perf_counter()
             mesh = source_mesh(view)

@@ -201,3 +201,14 @@ def test_a_photo_of_flat_sky_and_flat_ground_is_no_dice():
     faces = [cv2.GaussianBlur(rng.integers(0, 256, (24, 24, 3)).astype(np.uint8), (0, 0), 1.5) for _ in range(6)]
     ok, buf = cv2.imencode(".jpg", P.pack_faces(faces, "dice"), [cv2.IMWRITE_JPEG_QUALITY, 75])
     assert P.detect_layout(cv2.imdecode(buf, cv2.IMREAD_COLOR)) == "dice"
+
+
+def test_dice_unused_spread_refuses_what_is_no_4x3_image():
+    """The public spread measure names its argument for a wrong shape or a non-image."""
+    from panorama.layouts import dice_unused_spread
+
+    with pytest.raises(ValueError, match=r"pano: a dice image is \(3S, 4S\), got 64 x 32"):
+        dice_unused_spread(np.zeros((32, 64, 3), np.uint8))
+    with pytest.raises((TypeError, ValueError), match="pano"):
+        dice_unused_spread("not an image")
+    assert dice_unused_spread(np.zeros((48, 64), np.uint8)) == 0.0  # nothing varies anywhere

@@ -207,7 +207,8 @@ def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out:
     return _rasterize_many_into([mesh], camera, footprint, depth_tol, [out])[0]
 
 
-def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: float, outs, crack_rel: float = 0.0) -> list:
+def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: float, outs,
+                         crack_rel: float = 0.0) -> list:
     """:func:`_rasterize_into` for several meshes into the same camera, their bands of rows run
     in one pass of the band pool (one dispatch, and the pieces of all meshes balance out).
     ``crack_rel`` > 0: one-pixel cracks along rows between same-surface pixels are closed

@@ -49,7 +49,6 @@ METHODS = ("mesh", "forward")
 LODS = ("move", "depth")
 
 
-
 @dataclass(frozen=True, eq=False)
 class Rendering:
     """A rendered view and what is known about each pixel.

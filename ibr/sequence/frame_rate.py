@@ -111,8 +111,8 @@ def _previous_fill(r: Rendering, previous: Rendering, axis: int) -> Rendering:
     if not r.holes.any():
         return r
     two_d = r.color.ndim == 2
-    color = np.ascontiguousarray(r.color[..., None] if two_d else r.color).copy()
-    depth = np.ascontiguousarray(r.depth, np.float32).copy()
+    color = np.array(r.color[..., None] if two_d else r.color, order="C")  # copies, filled in place
+    depth = np.array(r.depth, np.float32, order="C")
     pc = previous.color[..., None] if previous.color.ndim == 2 else previous.color
     filled = _fill_previous_inplace(color, depth, r.holes, None, pc, previous.depth, axis=axis)
     return Rendering(color[..., 0] if two_d else color, depth, r.holes, filled, r.camera, r.t)
