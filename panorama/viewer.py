@@ -181,13 +181,16 @@ def copy_page(folder, *, canvas: bool = False) -> Path:
     """Write the viewer page into a site ``folder``; return its path. ``canvas``: keep the tag
     that loads the canvas UI (:data:`CANVAS_SCRIPT_TAG`; only sites served with their canvas
     store have ``canvas.js``)."""
+    from ibr.io import atomic_path
+
     page = Path(folder) / "index.html"
     html = (WEB_DIR / "index.html").read_text(encoding="utf-8")
     if CANVAS_SCRIPT_TAG not in html:
         raise RuntimeError(f"{WEB_DIR / 'index.html'}: no {CANVAS_SCRIPT_TAG} (the page and viewer.py disagree)")
     if not canvas:
-        html = html.replace(CANVAS_SCRIPT_TAG + "\n", "").replace(CANVAS_SCRIPT_TAG, "")
-    page.write_text(html, encoding="utf-8")
+        html = html.replace(CANVAS_SCRIPT_TAG, "")
+    with atomic_path(page) as tmp:  # write_canvas_site rewrites the page of a finished site
+        tmp.write_text(html, encoding="utf-8")
     return page
 
 
