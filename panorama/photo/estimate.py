@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from .features import PairData
+from .features import PairData, reindexed
 
 __all__ = ["Estimate", "estimate_rotations", "orthonormal", "yaw_pitch_roll"]
 
@@ -83,10 +83,7 @@ def _subset(features, pairs, idx):
     n, m = len(features), len(idx)
     feats, sub = [], []
     for a, i in enumerate(idx):
-        f = features[i]
-        g = cv2.detail.ImageFeatures()
-        g.img_idx, g.img_size, g.keypoints, g.descriptors = a, f.img_size, f.keypoints, f.descriptors
-        feats.append(g)
+        feats.append(reindexed(features[i], a))
     for a, i in enumerate(idx):
         for b, j in enumerate(idx):
             src = pairs[i * n + j]

@@ -131,7 +131,7 @@ def match(features, detector: str = "sift", *, only=None) -> list:
     if len(keep) < 2:
         return pairs
     matcher = cv2.detail.BestOf2NearestMatcher(False, MATCH_CONF[detector])
-    sub = list(matcher.apply2([_reindexed(features[k], a) for a, k in enumerate(keep)]))
+    sub = list(matcher.apply2([reindexed(features[k], a) for a, k in enumerate(keep)]))
     matcher.collectGarbage()
     m_keep = len(keep)
     for a, i in enumerate(keep):
@@ -152,8 +152,9 @@ def _empty_pair(i: int, j: int):
     return m
 
 
-def _reindexed(f, idx: int):
-    """A copy of ``ImageFeatures`` ``f`` with ``img_idx`` = ``idx`` (its position in a subset)."""
+def reindexed(f, idx: int):
+    """A copy of ``ImageFeatures`` ``f`` with ``img_idx`` = ``idx`` (its position in a subset of
+    the photos; the caller's object is untouched). Shared by matching and estimation."""
     g = cv2.detail.ImageFeatures()
     g.img_idx, g.img_size, g.keypoints, g.descriptors = idx, f.img_size, f.keypoints, f.descriptors
     return g
