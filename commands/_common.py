@@ -160,7 +160,7 @@ def face_file_patterns(ext: str | None = None) -> tuple[str, ...]:
 def note_first_run(*modules: str, warm: str = "frame", announce: bool = True) -> bool:
     """Whether numba has kernels of ``modules`` (kernel modules, e.g.
     ``"ibr.render._raster_kernels"``) to compile: a module without a cache index, or with one
-    older than its source (an update); then start compiling the kernels ``warm`` names ("frame":
+    numba would not load (written for an older source: an update, see :func:`_stale_kernels`); then start compiling the kernels ``warm`` names ("frame":
     the rasterizer and the hole fill's pull-push; "stitch" / "stitch-ods": the ray
     rasterizer's setup, the plane fit, the blend's accumulation and the panorama's hole fill;
     "mesh": the segmentation's plane tests and plane fit) in a second process
@@ -202,9 +202,12 @@ def _note_first_run(modules, warm: str) -> bool:
 
 
 def _stale_kernels(name: str) -> bool:
-    """Whether kernel module ``name`` has no numba cache index, or only ones older than its
-    source (numba then compiles its kernels again), in the folder numba caches it in
-    (:func:`_numba_cache_dir`). False when that cannot be told (a module in a zip file)."""
+    """Whether kernel module ``name`` has no numba cache index that numba would load: none written
+    by this numba for the source as it is now (numba stamps an index with the SHA-256 of the
+    source's bytes, so a source touched but unchanged, e.g. by a git checkout, stays cached), in
+    the folder numba caches it in (:func:`_numba_cache_dir`). False when that cannot be told (a
+    module in a zip file)."""
+    import hashlib
     import importlib.util
 
     spec = importlib.util.find_spec(name)
@@ -212,12 +215,29 @@ def _stale_kernels(name: str) -> bool:
         return False
     path = Path(spec.origin)
     try:
-        source_time = path.stat().st_mtime
+        stamp = hashlib.sha256(path.read_bytes()).digest()
         cache = _numba_cache_dir(path)
         indexes = list(cache.glob(f"{path.stem}.*.nbi")) if cache is not None and cache.is_dir() else []
-        return not any(p.stat().st_mtime >= source_time for p in indexes)
     except OSError:
         return False
+    return not any(_index_stamp(p) == stamp for p in indexes)
+
+
+def _index_stamp(index: Path):
+    """The source stamp of numba cache index ``index`` (numba.core.caching.IndexDataCacheFile: the
+    numba version, pickled, then the pickled (stamp, overloads)); None when it was written by
+    another numba version or cannot be read."""
+    import importlib.metadata
+    import pickle
+
+    try:
+        with open(index, "rb") as f:
+            if pickle.load(f) != importlib.metadata.version("numba"):
+                return None
+            stamp, _ = pickle.loads(f.read())
+    except Exception:  # noqa: BLE001 - a truncated or foreign file: not an index numba would load
+        return None
+    return stamp
 
 
 def _numba_cache_dir(path: Path) -> Path | None:

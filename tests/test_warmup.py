@@ -7,6 +7,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -258,10 +259,26 @@ def test_the_cli_starts_the_helper_before_the_command_runs(monkeypatch, capsys):
     assert "compiling" not in capsys.readouterr().err  # the CLI's own ask is quiet
 
 
-def test_kernels_older_than_their_source_count_as_a_first_run(tmp_path, monkeypatch):
-    """A kernel module whose numba cache index is older than its source (an update) is compiled
-    again, so it counts as a first run (helper, and the summary says it compiled); a fresh index
-    does not."""
+def _numba_index(folder: Path, src: Path, version: str | None = None) -> None:
+    """Write the cache index numba writes for a kernel of source file ``src`` as it is now (with
+    numba's own writer; ``version``: as another numba version would)."""
+    import numba.core.caching as caching
+
+    folder.mkdir(parents=True, exist_ok=True)
+    st = src.stat()
+    index = caching.IndexDataCacheFile(str(folder), f"{src.stem}.f-1.py311",
+                                       caching._hash_source_file(str(src), st.st_mtime, st.st_size))
+    if version is not None:
+        index._version = version
+    index._save_index({})
+
+
+def test_kernels_cached_for_another_source_count_as_a_first_run(tmp_path, monkeypatch):
+    """A kernel module without a numba cache index numba would load (none, one for an older
+    source: an update, one of another numba version) is compiled again, so it counts as a first
+    run (helper, and the summary says it compiled); a fresh index does not, and neither does a
+    source touched but unchanged (a git checkout: numba stamps the source's bytes, not its time;
+    every warm run said "compiling" after one)."""
     import commands._common as common
 
     pkg = tmp_path / "kpkg"
@@ -273,14 +290,17 @@ def test_kernels_older_than_their_source_count_as_a_first_run(tmp_path, monkeypa
     monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
     assert common._stale_kernels("kpkg._k_kernels")  # no index
     cache = pkg / "__pycache__"
-    cache.mkdir()
-    index = cache / "_k_kernels.f-1.py311.nbi"
-    index.write_bytes(b"")
-    os.utime(src, (1_000_000, 1_000_000))
-    os.utime(index, (2_000_000, 2_000_000))
-    assert not common._stale_kernels("kpkg._k_kernels")  # cached after the source was written
-    os.utime(src, (3_000_000, 3_000_000))
+    _numba_index(cache, src, version="0.1.0")
+    assert common._stale_kernels("kpkg._k_kernels")  # another numba's index
+    _numba_index(cache, src)
+    assert not common._stale_kernels("kpkg._k_kernels")  # cached for this source
+    later = time.time() + 3600
+    os.utime(src, (later, later))
+    assert not common._stale_kernels("kpkg._k_kernels")  # touched after the index, the same bytes
+    src.write_text("X = 2\n")
     assert common._stale_kernels("kpkg._k_kernels")  # the source changed since
+    (cache / "_k_kernels.g-1.py311.nbi").write_bytes(b"\x80garbage")
+    assert common._stale_kernels("kpkg._k_kernels")  # an unreadable index counts for nothing
 
 
 def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, monkeypatch):
@@ -406,11 +426,9 @@ def test_the_first_run_check_looks_where_numba_caches(tmp_path, monkeypatch):
         assert common._numba_cache_dir(src) == numba_choice()
         other = cache / f"kpkg2_{hashlib.sha1(b'/elsewhere/kpkg2').hexdigest()}"
         other.mkdir(parents=True)
-        (other / "_k_kernels.f-1.py311.nbi").write_bytes(b"")
+        _numba_index(other, src)
         assert common._stale_kernels("kpkg2._k_kernels")  # another checkout's index
-        mine = common._numba_cache_dir(src)
-        mine.mkdir(parents=True, exist_ok=True)
-        (mine / "_k_kernels.f-1.py311.nbi").write_bytes(b"")
+        _numba_index(common._numba_cache_dir(src), src)
         assert not common._stale_kernels("kpkg2._k_kernels")
     finally:
         monkeypatch.delenv("NUMBA_CACHE_DIR")
