@@ -159,9 +159,9 @@ def face_file_patterns(ext: str | None = None) -> tuple[str, ...]:
 
 def note_first_run(*modules: str, warm: str = "frame", announce: bool = True) -> bool:
     """Whether numba has kernels of ``modules`` (kernel modules, e.g.
-    ``"ibr.render._raster_kernels"``) to compile: a module without a cache index, or with one
-    numba would not load (written for an older source: an update, see :func:`_stale_kernels`); then start compiling the kernels ``warm`` names ("frame":
-    the rasterizer and the hole fill's pull-push; "stitch" / "stitch-ods": the ray
+    ``"ibr.render._raster_kernels"``) to compile: a module without a cache index numba would
+    load (:func:`_stale_kernels`: none, or only ones for an older source, an update); then
+    start compiling the kernels ``warm`` names ("frame": the rasterizer and the hole fill's pull-push; "stitch" / "stitch-ods": the ray
     rasterizer's setup, the plane fit, the blend's accumulation and the panorama's hole fill;
     "mesh": the segmentation's plane tests and plane fit) in a second process
     (:mod:`ibr.render.warmup`) and, with ``announce``, say so (once). The answer is kept for the
