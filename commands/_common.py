@@ -161,8 +161,8 @@ def note_first_run(*modules: str, warm: str = "frame", announce: bool = True) ->
     """Whether numba has kernels of ``modules`` (kernel modules, e.g.
     ``"ibr.render._raster_kernels"``) to compile: a module without a cache index numba would
     load (:func:`_stale_kernels`: none, or only ones for an older source, an update); then
-    start compiling the kernels ``warm`` names ("frame": the rasterizer and the hole fill's pull-push; "stitch" / "stitch-ods": the ray
-    rasterizer's setup, the plane fit, the blend's accumulation and the panorama's hole fill;
+    start compiling the kernels ``warm`` names ("frame": the rasterizer and the hole fill's
+    pull-push; "stitch" / "stitch-ods": the ray rasterizer's setup, the plane fit, the blend's accumulation and the panorama's hole fill;
     "mesh": the segmentation's plane tests and plane fit) in a second process
     (:mod:`ibr.render.warmup`) and, with ``announce``, say so (once). The answer is kept for the
     rest of the command (:func:`forget_first_run` at the start of the next): the CLI asks first,
