@@ -160,14 +160,14 @@ def face_file_patterns(ext: str | None = None) -> tuple[str, ...]:
 def note_first_run(*modules: str, warm: str = "frame", announce: bool = True) -> bool:
     """Whether numba has kernels of ``modules`` (kernel modules, e.g.
     ``"ibr.render._raster_kernels"``) to compile: a module without a cache index numba would
-    load (:func:`_stale_kernels`: none, or only ones for an older source, an update); then
-    start compiling the kernels ``warm`` names ("frame": the rasterizer and the hole fill's
-    pull-push; "stitch" / "stitch-ods": the ray rasterizer's setup, the plane fit, the blend's accumulation and the panorama's hole fill;
-    "mesh": the segmentation's plane tests and plane fit) in a second process
-    (:mod:`ibr.render.warmup`) and, with ``announce``, say so (once). The answer is kept for the
-    rest of the command (:func:`forget_first_run` at the start of the next): the CLI asks first,
-    quietly, before the command's imports and input checks (:func:`cli.main`); the command asks
-    again after its checks, and only then is the line printed."""
+    load (:func:`_stale_kernels`: none, or only ones for an older source, an update); then start
+    compiling the kernels ``warm`` names ("frame": the rasterizer and the hole fill's pull-push;
+    "stitch" / "stitch-ods": the ray rasterizer's setup, the plane fit, the blend's accumulation
+    and the panorama's hole fill; "mesh": the segmentation's plane tests and plane fit) in a
+    second process (:mod:`ibr.render.warmup`) and, with ``announce``, say so (once). The answer
+    is kept for the rest of the command (:func:`forget_first_run` at the start of the next): the
+    CLI asks first, quietly, before the command's imports and input checks (:func:`cli.main`);
+    the command asks again after its checks, and only then is the line printed."""
     key = (modules, warm)
     if key not in _FIRST_RUN_NOTED:
         _FIRST_RUN_NOTED[key] = _note_first_run(modules, warm)
