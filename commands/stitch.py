@@ -217,8 +217,11 @@ def run(args) -> int:
         plan.check()  # every output checked before any work
 
         if args.panorama:
-            panorama = (read_image(args.panorama[0], what="--panorama COLOR"),
-                        read_depth(args.panorama[1], what="--panorama RANGE"))
+            from panorama.stitch import check_rgbd_panorama
+
+            panorama = check_rgbd_panorama(read_image(args.panorama[0], what="--panorama COLOR"),
+                                           read_depth(args.panorama[1], what="--panorama RANGE"),
+                                           names=("--panorama COLOR", "--panorama RANGE"))
             views, n = None, 6
         else:
             panorama, views = None, [load_view(p) for p in args.views]

@@ -33,7 +33,7 @@ VERSION = 1
 _HEADER = struct.Struct("<4sII6I")
 
 
-def face_meshes(color, range_, *, face_size: int | None = None, head_box: float = 0.1,
+def face_meshes(color, range_map, *, face_size: int | None = None, head_box: float = 0.1,
                 max_error_px: float = 0.5) -> list[QuadMesh]:
     """Six quad meshes (px nx py ny pz nz) of an equirect RGB-D panorama.
 
@@ -41,7 +41,7 @@ def face_meshes(color, range_, *, face_size: int | None = None, head_box: float 
     ----------
     color : (H, 2H[, C]) array
         Equirect colour (used only for its size and for the face views' checks).
-    range_ : (H, 2H) float array
+    range_map : (H, 2H) float array
         Range along each pixel's ray from the panorama's centre, scene units; NaN where there is
         no depth (sky): those pixels get no quad and the viewer shows them at infinity.
     face_size : int, optional
@@ -57,7 +57,7 @@ def face_meshes(color, range_, *, face_size: int | None = None, head_box: float 
 
     head_box = check_number("head_box", head_box, minimum=0.0, exclusive_minimum=True)
     max_error_px = check_number("max_error_px", max_error_px, minimum=0.0, exclusive_minimum=True)
-    views = panorama_views(color, range_, face_size=face_size)
+    views = panorama_views(color, range_map, face_size=face_size)
     return [build_mesh(v, max_error_px=max_error_px, baseline=head_box) for v in views]
 
 

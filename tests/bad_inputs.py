@@ -464,6 +464,9 @@ _add("cubemap --width odd", C, "error", r"--width: expected an even number", arg
      "--width", "33"), extra={"dice": "c.png"})
 _add("cubemap --depth on a negative range map", C, "error", r"image: depth must be positive .*1 negative value",
      argv=("cubemap", "{d}/range_neg.exr", "--depth", "-o", "{d}/c.exr"), issue=True)
+_add("stitch --panorama with a negative range (named as the option, was the library's range_)", C, "error",
+     r"--panorama RANGE: expected positive ranges", argv=("stitch", "--panorama", "{d}/pano.png", "{d}/range_neg.exr",
+     "--stereo", "ods", "-o", "{d}/ods.png"))
 _add("cubemap --depth to .png", C, "error", r"-o: depth is float", argv=("cubemap", "{d}/range_neg.exr", "--depth", "-o",
      "{d}/c.png"))
 _add("cubemap --ext .bmp", C, "error", r"--ext: expected one of", argv=("cubemap", "{d}/pano.png", "-o", "{d}/faces",

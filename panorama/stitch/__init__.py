@@ -9,10 +9,11 @@ stitching that ODS is measured against.
 """
 
 from .fill import fill_panorama, fill_stitched
-from .ods import ODS_LAYOUTS, OdsPair, ods_from_panorama, ods_from_views, pack_ods, panorama_views
+from .ods import (ODS_LAYOUTS, OdsPair, check_rgbd_panorama, ods_from_panorama, ods_from_views, pack_ods,
+                  panorama_views)
 from .rgbd import Stitched, stitch_rgbd, stitch_rgbd_cubemap
 from .rigs import cube_rig, equirect_camera, ods_cameras, ring_rig
 
-__all__ = ["ODS_LAYOUTS", "OdsPair", "Stitched", "cube_rig", "equirect_camera", "fill_panorama", "fill_stitched", "ods_cameras",
-           "ods_from_panorama", "ods_from_views", "pack_ods", "panorama_views", "ring_rig", "stitch_rgbd",
+__all__ = ["ODS_LAYOUTS", "OdsPair", "Stitched", "check_rgbd_panorama", "cube_rig", "equirect_camera", "fill_panorama",
+           "fill_stitched", "ods_cameras", "ods_from_panorama", "ods_from_views", "pack_ods", "panorama_views", "ring_rig", "stitch_rgbd",
            "stitch_rgbd_cubemap"]

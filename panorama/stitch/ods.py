@@ -30,7 +30,7 @@ from ..directions import FACE_NAMES
 from .rgbd import Stitched, check_views, stitch_rgbd
 from .rigs import cube_rig, ods_cameras
 
-__all__ = ["ODS_LAYOUTS", "OdsPair", "ods_from_panorama", "ods_from_views", "pack_ods", "panorama_views"]
+__all__ = ["ODS_LAYOUTS", "OdsPair", "check_rgbd_panorama", "ods_from_panorama", "ods_from_views", "pack_ods", "panorama_views"]
 
 #: Output layouts of :func:`pack_ods`.
 ODS_LAYOUTS = ("top-bottom", "sbs", "anaglyph", "cube")
@@ -99,24 +99,36 @@ def ods_from_views(views, width: int, *, ipd: float = 0.064, fade_start_deg: flo
     return OdsPair(*eyes)
 
 
-def panorama_views(color, range_, *, face_size: int | None = None, center=(0.0, 0.0, 0.0)) -> list[View]:
-    """Six cube-face RGB-D views (90-degree pinholes at ``center``) cut from an equirect panorama.
-
-    ``color`` (H, 2H[, C]) and ``range_`` (H, 2H) float range along each ray (NaN = none). Face
-    size defaults to ``ceil(W / pi)`` rounded up to even (the equator's angular resolution at the
-    face centres). Depth becomes planar z per face (:mod:`panorama.depth`).
-    """
+def check_rgbd_panorama(color, range_map, names=("color", "range_map")) -> tuple[np.ndarray, np.ndarray]:
+    """``(color, range_map)`` as arrays after checking them as one centre RGB-D panorama: an
+    equirect colour (H, 2H[, C]) and a float range map of its shape, positive where finite, with at
+    least one range (NaN = none). Errors name the two inputs by ``names`` (the CLI passes its
+    ``--panorama COLOR`` / ``--panorama RANGE``)."""
     color = np.asarray(color)
-    rng = np.asarray(range_)
+    rng = np.asarray(range_map)
     if color.ndim not in (2, 3) or color.shape[1] != 2 * color.shape[0]:
-        raise ValueError(f"color: expected an equirect image (H, 2H[, C]), got shape {color.shape}")
+        raise ValueError(f"{names[0]}: expected an equirect image (H, 2H[, C]), got shape {color.shape}")
     if rng.shape != color.shape[:2]:
-        raise ValueError(f"range_: expected shape {color.shape[:2]} (the colour's), got {rng.shape}")
+        raise ValueError(f"{names[1]}: expected shape {color.shape[:2]} (the colour's), got {rng.shape}")
     if rng.dtype.kind != "f":
-        raise TypeError(f"range_: expected a float range map, got dtype {rng.dtype}")
+        raise TypeError(f"{names[1]}: expected a float range map, got dtype {rng.dtype}")
     with np.errstate(invalid="ignore"):
         if np.any(rng <= 0):
-            raise ValueError("range_: expected positive ranges (NaN where there is none), got values <= 0")
+            raise ValueError(f"{names[1]}: expected positive ranges (NaN where there is none), got values <= 0")
+    if not np.isfinite(rng).any():
+        raise ValueError(f"{names[1]}: no pixel has a range (all NaN): nothing to stitch")
+    return color, rng
+
+
+def panorama_views(color, range_map, *, face_size: int | None = None, center=(0.0, 0.0, 0.0)) -> list[View]:
+    """Six cube-face RGB-D views (90-degree pinholes at ``center``) cut from an equirect panorama.
+
+    ``color`` (H, 2H[, C]) and ``range_map`` (H, 2H) float range along each ray (NaN = none; at
+    least one range; :func:`check_rgbd_panorama`). Face size defaults to ``ceil(W / pi)`` rounded
+    up to even (the equator's angular resolution at the face centres). Depth becomes planar z per
+    face (:mod:`panorama.depth`).
+    """
+    color, rng = check_rgbd_panorama(color, range_map)
     if face_size is None:
         face_size = int(math.ceil(color.shape[1] / math.pi / 2) * 2)
     faces = equirect_to_cubemap(color, face_size, layout="dict")
@@ -125,7 +137,7 @@ def panorama_views(color, range_, *, face_size: int | None = None, center=(0.0, 
             for name, cam in zip(FACE_NAMES, cube_rig(face_size, center=center))]
 
 
-def ods_from_panorama(color, range_, *, width: int | None = None, ipd: float = 0.064, fade_start_deg: float = 60.0,
+def ods_from_panorama(color, range_map, *, width: int | None = None, ipd: float = 0.064, fade_start_deg: float = 60.0,
                       fade_end_deg: float = 80.0, fill: str = "background", face_size: int | None = None,
                       mesh_options: dict | None = None, progress=None, **blend_options) -> OdsPair:
     """ODS eye panoramas from one centre RGB-D panorama (equirect colour + range).
@@ -136,9 +148,7 @@ def ods_from_panorama(color, range_, *, width: int | None = None, ipd: float = 0
     A cube face without any range (a sky without depth) has nothing to render and is left out:
     its directions are holes of the eyes.
     """
-    views = [v for v in panorama_views(color, range_, face_size=face_size) if np.isfinite(v.depth).any()]
-    if not views:
-        raise ValueError("range_: no pixel has a range (all NaN): nothing to stitch")
+    views = [v for v in panorama_views(color, range_map, face_size=face_size) if np.isfinite(v.depth).any()]
     width = np.asarray(color).shape[1] if width is None else width
     return ods_from_views(views, width, ipd=ipd, fade_start_deg=fade_start_deg, fade_end_deg=fade_end_deg,
                           center=(0.0, 0.0, 0.0), fill=fill, mesh_options=mesh_options, progress=progress,
