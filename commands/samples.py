@@ -1,8 +1,9 @@
 """``ibr samples``: write the bundled sample views to a folder as view files.
 
 Files are named ``<scene>_<view>.json`` (plus the color/depth files they reference); the
-bundled ``manifest.json`` (scene pairs and ground-truth views) is copied alongside; the
-Middlebury pair becomes ``motorcycle_left.json`` (disparity PFM with its calibration) and
+bundled ``manifest.json`` (scene pairs and ground-truth views) is copied alongside, the bundled
+rig (``rig/``: ten posed views of the capture hall, ``rig.json`` and its centre panorama, the
+input of ``ibr stitch``) into a ``rig`` subfolder; the Middlebury pair becomes ``motorcycle_left.json`` (disparity PFM with its calibration) and
 ``motorcycle_right.json`` (color and camera only). Existing files of the same names in the
 output folder are replaced atomically; the bundled data folder itself is refused as output.
 """
@@ -67,12 +68,16 @@ def run(args) -> int:
           "motorcycle_right.json", "motorcycle_right_color.png"]
     if not args.no_middlebury:
         names += mb
+    rig_files = bundled_rig_files()
     with OutputPlan("ibr samples", log=info) as plan:
         plan.add_input("bundled samples", DATA_DIR)
         folder = plan.add_folder("--out", out, tuple(names))  # exactly the files this command writes
+        rig_folder = plan.add_folder("--out", out / "rig", tuple(p.name for p in rig_files)) if rig_files else None
         plan.check()
         staged = plan.stage(folder)
         written = []
+        if rig_folder is not None:
+            written += [out / "rig" / p.name for p in copy_rig(rig_files, plan.stage(rig_folder))]
         if bundled:
             written += [out / copy_view_file(p, staged).name for p in bundled]
             if manifest.is_file():  # scene pairs and ground-truth views (written by samples/generate.py)
@@ -114,6 +119,36 @@ def bundled_view_files():
         if isinstance(doc, dict) and doc.get("format") == "ibr-view":
             found.append(path)
     return found
+
+
+def bundled_rig_files():
+    """The files of the bundled rig folder ``samples/data/rig`` (none when it is missing)."""
+    from samples import DATA_DIR
+
+    rig = DATA_DIR / "rig"
+    return sorted(p for p in rig.iterdir() if p.is_file()) if rig.is_dir() else []
+
+
+def copy_rig(files, out_dir):
+    """Copy the rig's files into ``out_dir``: view files through :func:`copy_view_file` (checked,
+    with the images they name), the others (``rig.json``, the centre panorama) as they are.
+    Returns the view files written (paths in ``out_dir``)."""
+    import json
+    import shutil
+    from pathlib import Path
+
+    from ibr.io import atomic_path
+
+    copied, views = set(), []
+    for p in files:
+        if p.suffix == ".json" and json.loads(p.read_text(encoding="utf-8")).get("format") == "ibr-view":
+            views.append(copy_view_file(p, out_dir))
+            copied.update([p.name] + _referenced_names(p))
+    for p in files:
+        if p.name not in copied:
+            with atomic_path(Path(out_dir) / p.name) as tmp:
+                shutil.copyfile(p, tmp)
+    return views
 
 
 def copy_view_file(src, out_dir):

@@ -119,6 +119,22 @@ def test_samples_copies_every_bundled_view(samples_dir):
     assert not [p for p in samples_dir.rglob(".*")]  # no temporary files left behind
 
 
+def test_samples_copies_the_rig_and_it_stitches(samples_dir):
+    """The bundled rig lands in ``--out``/rig byte for byte (views, rig.json, the centre panorama),
+    and its views load and stitch from there as from samples/data/rig."""
+    from samples import DATA_DIR
+
+    bundled = sorted(p.name for p in (DATA_DIR / "rig").iterdir() if p.is_file())
+    assert sorted(p.name for p in (samples_dir / "rig").iterdir()) == bundled
+    for name in bundled:
+        assert (samples_dir / "rig" / name).read_bytes() == (DATA_DIR / "rig" / name).read_bytes(), name
+    views = sorted((samples_dir / "rig").glob("rig_*.json"))
+    assert len(views) == len(json.loads((DATA_DIR / "rig" / "rig.json").read_text())["views"]) == 10
+    out = samples_dir.parent / "pano.png"
+    assert cli.main(["stitch", *map(str, views), "-o", str(out), "--width", "64", "--depth-out", "none"]) == 0
+    assert out.is_file()
+
+
 def test_samples_rerun_replaces_and_refuses_its_own_data_folder(samples_dir, capsys):
     assert cli.main(["samples", "--out", str(samples_dir), "--no-middlebury"]) == 0
     from samples import DATA_DIR
