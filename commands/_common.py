@@ -122,11 +122,14 @@ class terminate_as_interrupt:
         return False
 
 
-def image_for(path, img):
+def image_for(path, img, what: str = "-o"):
     """``img`` in a dtype the file format of ``path`` stores, so that any colour can be written to
-    any advertised extension: float [0, 1] becomes uint8 for .png / .jpg (clipped, rounded),
-    uint16 becomes uint8 for .jpg (which also drops an alpha channel), uint8 / uint16 become float32 [0, 1] for .exr / .pfm (float64:
-    float32 there and for .tif); anything else is returned as is."""
+    any advertised extension: float [0, 1] becomes uint8 for .png / .jpg (clipped, rounded; an
+    HDR colour's highlights clip), uint16 becomes uint8 for .jpg (which also drops an alpha
+    channel), uint8 / uint16 become float32 [0, 1] for .exr / .pfm (float64: float32 there and for
+    .tif); anything else is returned as is. A one-channel float image with values outside
+    [0, 1] (a depth or range map) is refused for .png / .jpg, naming ``what``: clipped it would
+    be all white."""
     import numpy as np
 
     ext = Path(path).suffix.lower()
@@ -134,6 +137,9 @@ def image_for(path, img):
     if ext in (".jpg", ".jpeg") and a.ndim == 3 and a.shape[2] in (2, 4):  # JPEG holds no alpha
         a = a[..., : a.shape[2] - 1]
     if ext in (".png", ".jpg", ".jpeg") and a.dtype.kind == "f":
+        from ibr.io.images import check_unit_colour
+
+        check_unit_colour(what, a, Path(path).name)
         return np.clip(np.rint(np.nan_to_num(a) * 255.0), 0, 255).astype(np.uint8)
     if ext in (".jpg", ".jpeg") and a.dtype == np.uint16:
         return ((a.astype(np.uint32) + 128) // 257).astype(np.uint8)

@@ -35,6 +35,7 @@ from ibr.base.validate import MAX_IMAGE_SIDE
 from .convert import equirect_to_cubemap, perspective
 from .directions import FACE_FILE_NAMES
 from ibr.io import write_image
+from ibr.io.images import check_unit_colour
 from .layouts import unpack_faces
 
 __all__ = ["SITE_FILES", "STEREO_LAYOUTS", "VIEW_MODES", "WEB_DIR", "check_depth_site", "check_site_folder", "serve",
@@ -140,6 +141,7 @@ def write_site(folder, pano, *, layout: str | None = None, face_size: int | None
         raise ValueError("tiles: tile pyramids are for mono panoramas (a stereo pair holds two face sets)")
     if depth is not None:
         check_depth_site(pano, layout, stereo, tiles, depth)
+    check_unit_colour("pano", pano, "the site's faces", "a range map is the depth of a colour panorama (depth=, --depth)")
     eyes = split_stereo(pano, stereo) if stereo is not None else (pano,)
     largest = MAX_TILED_FACE_SIZE if tiles else MAX_FACE_SIZE
     if face_size is not None and face_size > largest:

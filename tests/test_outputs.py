@@ -643,3 +643,30 @@ def test_final_review_round(tmp_path, monkeypatch, capsys):
     for n in ("px", "nx", "py", "ny", "pz", "nz"):
         (faces / f"{n}.PNG").write_bytes(b"x")
     assert [p.name for p in find_face_files(faces)][0] == "px.PNG"
+
+
+def test_a_range_map_is_refused_as_8bit_grey_not_written_white(tmp_path):
+    """A one-channel float image with values outside [0, 1] (a range map) clipped to 8-bit was
+    all white, exit 0 (`ibr view RANGE.exr -o v.png`, `ibr view RANGE.exr --site S`): now refused
+    naming the output; 0-1 grey, HDR colour and an 8-bit PNG input still write."""
+    import cli
+    from commands._common import image_for
+    from ibr.io import read_image, write_image
+    from panorama.viewer import write_site
+
+    rng = np.full((32, 64), 2.0, np.float32)
+    rng[:, :20] = 7.5
+    write_image(tmp_path / "range.exr", rng)
+    with pytest.raises(ValueError, match=r"-o: v.png would hold 8-bit grey levels 0-1, .* holds 2 to 7.5"):
+        image_for(tmp_path / "v.png", rng)
+    with pytest.raises(ValueError, match=r"pano: the site's faces .* a range map is the depth"):
+        write_site(tmp_path / "site", rng)
+    assert not (tmp_path / "site").exists()
+    assert cli.main(["view", str(tmp_path / "range.exr"), "--yaw", "-90", "-o", str(tmp_path / "v.png")]) == 1
+    assert not (tmp_path / "v.png").exists()
+    grey = np.linspace(0, 1, 64, dtype=np.float32)[None].repeat(32, 0)
+    np.testing.assert_array_equal(image_for(tmp_path / "g.png", grey)[0], np.rint(grey[0] * 255).astype(np.uint8))
+    hdr = np.full((32, 64, 3), 3.0, np.float32)  # HDR colour clips (highlights), as before
+    assert (image_for(tmp_path / "h.png", hdr) == 255).all()
+    assert cli.main(["view", str(tmp_path / "range.exr"), "-o", str(tmp_path / "v.exr")]) == 0
+    assert read_image(tmp_path / "v.exr").max() > 1

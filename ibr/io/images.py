@@ -38,6 +38,7 @@ from ..base.validate import check_choice, check_image, check_image_size, nearest
 __all__ = [
     "DEPTH_CHANNEL_NAMES",
     "atomic_path",
+    "check_unit_colour",
     "check_write_dtype",
     "depth_channel_names",
     "read_depth",
@@ -238,6 +239,21 @@ def _one_line(message) -> str:
     kept = [line for i, line in enumerate(lines)
             if not any(line != other and line in other for other in lines) and line not in lines[:i]]
     return "; ".join(kept)
+
+
+def check_unit_colour(what: str, img, into: str, advice: str = "write it to .exr, .tif or .pfm") -> None:
+    """Refuse a one-channel float image whose finite values leave [0, 1] by more than half an
+    8-bit step before it is stored as 8-bit grey levels (``into``: the file or faces it was going
+    to): it is a depth or range map, and clipped it would be all white. Colour (three or four
+    channels) may be HDR and clips as usual. Raises ValueError naming ``what``, ending with
+    ``advice``."""
+    a = np.asarray(img)
+    if a.dtype.kind != "f" or not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] == 1)):
+        return
+    finite = a[np.isfinite(a)]
+    if finite.size and (finite.max() > 1 + 0.5 / 255 or finite.min() < -0.5 / 255):
+        raise ValueError(f"{what}: {into} would hold 8-bit grey levels 0-1, but this one-channel float image "
+                         f"holds {finite.min():.4g} to {finite.max():.4g} (a depth or range map); {advice}")
 
 
 def check_write_dtype(name: str, path, dtype) -> str:
