@@ -11,6 +11,7 @@ from ibr.base.camera import Camera, look_at
 from ibr.canvas import (Canvas, VideoSource, canvas_from_image, composite, composite_into, draw_stroke,
                         frame_schedule, pick_pixel, pick_pixels, pick_ray, power_of_two_size, stroke_from_screen,
                         texture_scale)
+from ibr.canvas.strokes import SCREEN_STEP_PX
 from ibr.synth import Box, ImageTexture, Rect, Scene, checker_texture, render
 from ibr.synth.textures import _photo
 
@@ -157,11 +158,33 @@ def test_stroke_from_screen_points_is_split_where_it_leaves_the_canvas():
     uv = np.stack([np.linspace(10, 190, 50), np.full(50, 49.5)], -1)
     parts = stroke_from_screen(cam, uv, c, others=[other])
     assert len(parts) == 2  # split by the nearer canvas
-    for part in parts:
-        back = c.world_from_pixel(part)
-        got, _ = cam.project(back)
-        assert np.all(np.isin(np.round(got[:, 0], 6), np.round(uv[:, 0], 6)))
+    # the screen x where the canvas's edges and the nearer canvas's edges project
+    x_of = lambda p: cam.project(np.array([p], float))[0][0, 0]  # noqa: E731
+    c_left, c_right = x_of((-0.5, 0, 2)), x_of((0.5, 0, 2))
+    o_left, o_right = x_of((0.25, 0, 1.5)), x_of((0.35, 0, 1.5))
+    ends = [(c_left, o_left), (o_right, c_right)]
+    for part, (x0, x1) in zip(parts, ends):
+        got, _ = cam.project(c.world_from_pixel(part))
+        inner = got[1:-1, 0]  # the listed points between the ends where the part enters and leaves
+        assert np.all(np.isin(np.round(inner, 6), np.round(uv[:, 0], 6)))
+        assert abs(got[0, 0] - x0) <= SCREEN_STEP_PX + 1e-9 and abs(got[-1, 0] - x1) <= SCREEN_STEP_PX + 1e-9
     assert stroke_from_screen(cam, [[1, 1], [2, 2]], c) == []  # misses: nothing to draw
+
+
+def test_a_screen_stroke_between_points_off_the_canvas_crosses_it():
+    """Only the listed screen points were picked: a line across the canvas between two points
+    off it drew nothing ("no stroke touches the canvas"), three points drew a dot. Now every
+    segment is sampled, so the stroke runs from edge to edge of the canvas, as in the CLI."""
+    cam = Camera.from_fov(200, 100, hfov_deg=60)
+    c = Canvas((0, 0, 2), (0, 0, -1), (1.0, 0.5), resolution=(100, 50))
+    for uv in ([[5, 50], [195, 50]], [[5, 50], [100, 50], [195, 50]]):
+        parts = stroke_from_screen(cam, uv, c)
+        assert len(parts) == 1
+        np.testing.assert_allclose(parts[0][[0, -1], 0], [-0.5, 99.5], atol=1.0)  # its edges, to a sample
+        assert np.ptp(parts[0][:, 1]) < 1e-6  # a screen row stays a canvas row
+        draw_stroke(c, parts[0], width=4)
+        painted = c.rgba[..., 3] > 0
+        assert painted[:, 0].any() and painted[:, -1].any()  # edge to edge
 
 
 # ----------------------------------------------------------------------------- picking

@@ -22,7 +22,7 @@ from ..base.validate import check_array, check_finite_scalar
 from .pick import pick_pixels
 from .plane import Canvas
 
-__all__ = ["draw_stroke", "parse_color", "stroke_from_screen"]
+__all__ = ["SCREEN_STEP_PX", "draw_stroke", "parse_color", "stroke_from_screen"]
 
 
 def parse_color(color) -> np.ndarray:
@@ -124,24 +124,54 @@ def draw_stroke(canvas: Canvas, points, *, width: float = 3.0, color=(1.0, 0.0, 
 def stroke_from_screen(camera: Camera, uv, canvas: Canvas, *, depth=None, others=(), depth_tol: float = 1e-3):
     """Canvas polylines of a stroke drawn at screen pixels ``uv`` (N, 2) of a pinhole camera.
 
-    Every point is picked (nearest visible canvas among ``canvas`` and ``others``, against the
-    scene ``depth``); points that land on ``canvas`` are kept in order, and the stroke is split
-    where it leaves ``canvas`` (off the canvas, hidden by the scene or by another canvas).
+    The screen polyline is sampled at most :data:`SCREEN_STEP_PX` apart along every segment and
+    every sample is picked (nearest visible canvas among ``canvas`` and ``others``, against the
+    scene ``depth``), so a segment is clipped where it leaves ``canvas`` (off its edge, hidden by
+    the scene or by another canvas) even when its end points lie outside it (only the listed
+    points were picked before: a line across the canvas between two points off it drew nothing).
+    A plane maps screen lines to canvas lines, so each part keeps only the listed points and
+    the points where it enters and leaves.
 
     Returns
     -------
     list of (M, 2) float64 arrays
-        Canvas pixel polylines; empty when no point lands on ``canvas`` (drawing them is a no-op).
+        Canvas pixel polylines in stroke order; empty when no point lands on ``canvas`` (drawing
+        them is a no-op).
     """
+    q = check_array("uv", uv, dtype_kind="fiu").astype(np.float64).reshape(-1, 2)
+    samples, vertex = _densify(q, SCREEN_STEP_PX)
     items = [canvas] + list(others)
-    index, xy, _ = pick_pixels(camera, uv, items, depth=depth, depth_tol=depth_tol)
-    parts, cur = [], []
-    for i, q in zip(index, xy):
-        if i == 0:
-            cur.append(q)
-        elif cur:
-            parts.append(np.array(cur))
-            cur = []
-    if cur:
-        parts.append(np.array(cur))
+    index, xy, _ = pick_pixels(camera, samples, items, depth=depth, depth_tol=depth_tol)
+    on = index == 0
+    parts = []
+    for start, stop in _runs(on):
+        keep = vertex[start:stop].copy()
+        keep[[0, -1]] = True  # where the part enters and leaves the canvas
+        parts.append(xy[start:stop][keep])
     return parts
+
+
+#: Largest screen distance (pixels) between two picked samples of a stroke.
+SCREEN_STEP_PX = 0.5
+
+
+def _densify(points, step: float):
+    """(samples (M, 2), is_vertex (M,) bool): the polyline ``points`` sampled at most ``step``
+    apart along each segment, its own points included (flagged)."""
+    if len(points) < 2:
+        return points, np.ones(len(points), bool)
+    out, flag = [], []
+    for a, b in zip(points[:-1], points[1:]):
+        n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+        t = np.arange(n)[:, None] / n
+        out.append(a + t * (b - a))
+        flag.append(np.arange(n) == 0)
+    out.append(points[-1:])
+    flag.append(np.array([True]))
+    return np.concatenate(out), np.concatenate(flag)
+
+
+def _runs(mask):
+    """(start, stop) of every run of True in the 1-D bool ``mask``."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]))
