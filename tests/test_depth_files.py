@@ -94,3 +94,21 @@ def test_view_file_channel_key(tmp_path):
     (tmp_path / "v.json").write_text(json.dumps(doc))
     with pytest.raises(ValueError, match="'channel' must be a channel name"):
         load_view(tmp_path / "v.json")
+
+
+def test_a_misspelt_encoding_parameter_is_matched_against_the_parameters(tmp_path):
+    """'scael' in a view file's depth section was answered "did you mean 'channel'?": only the
+    section's structural keys were offered at first. Parameters of the encoding are now named by
+    the parameter check (scale), the structural keys still by the first ('chanel' -> channel)."""
+    import shutil
+
+    from samples import DATA_DIR
+
+    for name in ("room_a_color.png", "room_a_depth.exr"):
+        shutil.copy(DATA_DIR / name, tmp_path / name)
+    doc = json.loads((DATA_DIR / "room_a.json").read_text())
+    for key, near in (("scael", "scale"), ("sclae", "scale"), ("chanel", "channel")):
+        bad = {**doc, "depth": {**doc["depth"], key: 1.0}}
+        (tmp_path / "v.json").write_text(json.dumps(bad))
+        with pytest.raises(ValueError, match=rf"{key}\b.*did you mean '{near}'"):
+            load_view(tmp_path / "v.json")

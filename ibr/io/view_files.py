@@ -280,8 +280,8 @@ def load_view(path) -> View:
             known = ("path", "encoding", "channel") + tuple(params)
             unknown = [k for k in spec if k not in known]
             if unknown:
-                near = nearest_name(str(unknown[0]), [k for k in ("path", "encoding", "channel") if k not in spec])
-                if near:
+                near = nearest_name(str(unknown[0]), [k for k in known if k not in spec])
+                if near in ("path", "encoding", "channel"):  # an encoding parameter is named below
                     raise ValueError(f"{dwhere}: unknown key {unknown[0]!r} (did you mean {near!r}?)")
         if not isinstance(spec, dict) or not isinstance(spec.get("path"), str) or not spec["path"]:
             raise ValueError(f"{dwhere} must be null or an object with a 'path' string, got {spec!r}")
