@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 HELP = "stitch posed RGB-D views into a 360-degree panorama, mono or omnidirectional stereo (ODS)"
 
 LAYOUTS = ("top-bottom", "sbs", "cube", "anaglyph")
@@ -23,7 +25,8 @@ def add_arguments(parser) -> None:
     from commands._common import positive_float
 
     parser.add_argument("views", nargs="*", metavar="VIEW.json",
-                        help="posed RGB-D view files (each with depth and a world_from_cam pose); or one "
+                        help="posed RGB-D view files (each with depth and a world_from_cam pose); or one rig "
+                             "file (rig.json, or its folder: its views, its centre as --center); or one "
                              "sequence per rig camera (manifest or folder of numbered views, all of one "
                              "length): frame k stitches view k of every sequence")
     parser.add_argument("--panorama", nargs=2, metavar=("COLOR", "RANGE"),
@@ -41,9 +44,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--width", type=_even_width, default=4096, help="equirect width per eye (even; default 4096)")
     parser.add_argument("--stereo", choices=("none", "ods"), default="none",
                         help="mono panorama (default) or omnidirectional stereo")
-    parser.add_argument("--ipd", type=positive_float, default=0.064,
+    parser.add_argument("--ipd", type=positive_float, default=None,
                         help="interpupillary distance in scene units (default 0.064, metres)")
-    parser.add_argument("--fade", type=float, nargs=2, default=(60.0, 80.0), metavar=("START", "END"),
+    parser.add_argument("--fade", type=float, nargs=2, default=None, metavar=("START", "END"),
                         help="latitudes (deg) where the ODS eye baseline fades to 0 (default 60 80)")
     parser.add_argument("--layout", choices=("equirect",) + LAYOUTS, default=None,
                         help="ODS: top-bottom (left eye on top, default), sbs, cube, anaglyph; mono: equirect "
@@ -57,6 +60,12 @@ def add_arguments(parser) -> None:
 
 
 def _check_args(args) -> None:
+    if args.stereo != "ods":  # the eyes' options (were ignored for a mono panorama)
+        given = [o for o, v in (("--ipd", args.ipd), ("--fade", args.fade)) if v is not None]
+        if given:
+            raise ValueError(f"{' / '.join(given)}: only used with --stereo ods (a mono panorama has no eyes)")
+    args.ipd = 0.064 if args.ipd is None else args.ipd
+    args.fade = (60.0, 80.0) if args.fade is None else args.fade
     a, b = args.fade  # (--width and --ipd are checked by their argparse types: usage errors)
     if not 0 < a < b <= 90:
         raise ValueError(f"--fade: expected 0 < START < END <= 90 (degrees of latitude), got {a:g} {b:g}")
@@ -73,6 +82,26 @@ def _check_args(args) -> None:
         raise ValueError("--layout: an ODS pair is packed top-bottom, sbs, cube or anaglyph, not equirect")
     if layout == "cube" and args.width < 4:  # faces of width / 4 px (was "face_size ... 0" after the work)
         raise ValueError(f"--width: --layout cube makes faces of width / 4 pixels; expected >= 4, got {args.width}")
+
+
+def _expand_rig(args):
+    """A rig file (``"format": "ibr-rig"``, or a folder holding ``rig.json``, as ``ibr samples``
+    writes one) given as the only VIEW becomes its view files, and its capture point the default
+    ``--center``. Returns the rig file's path (an input), or None."""
+    from panorama.stitch.rigs import RIG_FILE_NAME, is_rig_file, read_rig
+
+    rigs = [v for v in args.views if is_rig_file(v)]
+    if not rigs:
+        return None
+    if len(args.views) != 1:
+        raise ValueError(f"VIEW.json: {rigs[0]} is a rig file; give it alone (its views are the rig's) or only "
+                         "the view files")
+    rig = read_rig(args.views[0])
+    args.views = [str(v) for v in rig.views]
+    if args.center is None:
+        args.center = rig.center.tolist()
+    path = Path(rigs[0])
+    return path / RIG_FILE_NAME if path.is_dir() else path
 
 
 def _strip(faces: dict):
@@ -164,6 +193,11 @@ def _run_sequences(args) -> int:
     if args.panorama or args.holes_out or (args.depth_out not in (None, "none")):
         raise ValueError("VIEW.json: with sequences, -o is a folder of pano_NNNN.png (+ pano_NNNN_depth.exr "
                          "unless --depth-out none); --panorama, --holes-out and a --depth-out path do not apply")
+    from ibr.io.outputs import IMAGE_EXTS
+
+    if Path(args.output).suffix.lower() in IMAGE_EXTS:  # was made a folder of that name
+        raise ValueError(f"-o: with sequences the output is a folder receiving pano_NNNN.png, got the file name "
+                         f"{args.output}")
     seqs = [load_sequence(p) for p in args.views]
     lengths = {len(s.views) for s in seqs}
     if len(lengths) != 1:
@@ -186,7 +220,7 @@ def _run_sequences(args) -> int:
                    plan.stage(folder, f"pano_{k:04d}_depth.exr") if depth else None, None, packed, z, holes)
         info(f"stitch: {frames} frames of {_describe(args, len(seqs), seen, False)} (last frame)")
         plan.commit()
-    info(f"wrote {frames} panoramas to {args.output}/")
+    info(f"wrote {frames} panoramas to {Path(args.output)}/")
     return 0
 
 
@@ -198,12 +232,15 @@ def run(args) -> int:
     from ibr.io.outputs import DEPTH_EXTS, IMAGE_EXTS, OutputPlan
     from ibr.sequence import is_sequence
 
+    rig = _expand_rig(args)
     _check_args(args)
     if args.views and all(is_sequence(v) for v in args.views):
         return _run_sequences(args)
     out_path = Path(args.output)
     depth_arg = args.depth_out or str(out_path.with_name(out_path.stem + "_depth.exr"))
     with OutputPlan("ibr stitch", log=info) as plan:
+        if rig is not None:
+            plan.add_input("VIEW (rig file)", rig)
         for v in args.views:
             plan.add_view_input("VIEW", v)
         if args.panorama:

@@ -138,6 +138,6 @@ def run(args) -> int:
         plan.commit()
     h, w = result.image.shape[:2]
     info(f"stitch-photos: {len(result.report.used)} of {len(images)} photos -> {w}x{h} equirect {out}"
-         + (f", cube faces in {args.cube}/" if args.cube else "")
+         + (f", cube faces in {Path(args.cube)}/" if args.cube else "")
          + f" ({time.perf_counter() - start:.1f}s); view it with: ibr view {out} --serve")
     return 0

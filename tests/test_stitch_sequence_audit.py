@@ -289,3 +289,44 @@ def test_interpolate_sequence_without_static_holes_says_so(tmp_path, capsys):
     line = [x for x in err.splitlines() if "interpolate: flicker" in x]
     assert len(line) == 1 and "nan" not in line[0]
     assert "no static pixel was a hole" in line[0] or "in static hole pixels" in line[0]
+
+
+def test_stitch_takes_a_rig_file_or_its_folder(tmp_path, capsys):
+    """`ibr stitch RIG_FOLDER` stitched the folder as one camera's sequence (10 frames of 1 view,
+    holes 68 %, into a folder named like the -o file) and `ibr stitch rig/rig.json` failed on
+    "'format' must be 'ibr-view'": a rig file (or its folder) now stands for its views, with its
+    capture point as the centre, giving the panorama of its view files bit for bit."""
+    import cv2
+
+    from panorama.stitch.rigs import read_rig
+    from samples import DATA_DIR
+
+    rig = DATA_DIR / "rig"
+    views = [str(v) for v in read_rig(rig).views]
+    outs = {}
+    for name, args in (("views", views), ("file", [rig / "rig.json"]), ("folder", [rig])):
+        outs[name] = tmp_path / f"{name}.png"
+        assert _cli("stitch", *args, "-o", outs[name], "--width", 64, "--depth-out", "none") == 0
+    ref = cv2.imread(str(outs["views"]))
+    for name in ("file", "folder"):
+        np.testing.assert_array_equal(cv2.imread(str(outs[name])), ref)
+    assert _cli("stitch", rig / "rig.json", *views[:2], "-o", tmp_path / "x.png", "--width", 64) == 1
+    assert "rig.json is a rig file; give it alone" in capsys.readouterr().err
+    bad = tmp_path / "rig.json"
+    bad.write_text(json.dumps({"format": "ibr-rig", "version": 1, "views": ["a.json"], "centre": [0, 0, 0]}))
+    assert _cli("stitch", bad, "-o", tmp_path / "y.png") == 1
+    assert "unknown key 'centre' (did you mean 'center'?)" in capsys.readouterr().err
+
+
+def test_stitch_refuses_options_it_would_ignore(manifest, tmp_path, capsys):
+    """--ipd / --fade on a mono panorama were accepted and ignored; with rig sequences a file
+    name for -o became a folder of that name."""
+    from samples import DATA_DIR
+
+    view = DATA_DIR / "rig" / "rig_00.json"
+    for opt in (["--ipd", "0.05"], ["--fade", "50", "70"]):
+        assert _cli("stitch", view, "-o", tmp_path / "m.png", "--width", 16, *opt) == 1
+        assert f"{opt[0]}: only used with --stereo ods" in capsys.readouterr().err
+    assert _cli("stitch", manifest, manifest, "-o", tmp_path / "f3.png", "--width", 16, "--depth-out", "none") == 1
+    assert "-o: with sequences the output is a folder" in capsys.readouterr().err
+    assert not (tmp_path / "f3.png").exists() and not (tmp_path / "m.png").exists()

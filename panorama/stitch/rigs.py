@@ -6,17 +6,20 @@ Conventions of :mod:`panorama.directions`: rig frame x right, y down, z forward;
 
 from __future__ import annotations
 
+import json
 import math
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from ibr.base.camera import Camera
-from ibr.base.validate import check_finite_scalar, check_image_size
+from ibr.base.validate import check_finite_scalar, check_image_size, check_keys, check_relative_path
 from ibr.base.ray_camera import SphericalCamera
 
 from ..directions import WORLD_FROM_FACE
 
-__all__ = ["cube_rig", "equirect_camera", "ods_cameras", "ring_rig"]
+__all__ = ["RigFile", "cube_rig", "equirect_camera", "is_rig_file", "ods_cameras", "read_rig", "ring_rig"]
 
 
 def _center(center) -> np.ndarray:
@@ -108,3 +111,67 @@ def ring_rig(n: int, *, radius: float = 0.1, width: int = 640, height: int = 480
                 cam = Camera(cam.fx, fy, cam.cx, cam.cy, width, height, pose)
             cams.append(cam)
     return cams
+
+
+# ----------------------------------------------------------------------------- rig files
+#: File name of a rig inside its folder (``ibr stitch FOLDER`` reads FOLDER/rig.json).
+RIG_FILE_NAME = "rig.json"
+
+
+@dataclass(frozen=True)
+class RigFile:
+    """A rig file (``"format": "ibr-rig"``, written by ``samples/generate_rig.py``): the view
+    files of one capture (absolute paths), its capture point in the world frame, and its centre
+    panorama's colour and range files when it has one."""
+
+    views: tuple[Path, ...]
+    center: np.ndarray
+    panorama: tuple[Path, Path] | None = None
+
+
+def is_rig_file(path) -> bool:
+    """Whether ``path`` is a rig file, or a folder holding one (:data:`RIG_FILE_NAME`)."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / RIG_FILE_NAME
+    if p.suffix.lower() != ".json" or not p.is_file():
+        return False
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(doc, dict) and doc.get("format") == "ibr-rig"
+
+
+def read_rig(path) -> RigFile:
+    """Read a rig file (or the :data:`RIG_FILE_NAME` of a folder). Keys: ``format`` ("ibr-rig"),
+    ``version`` (1), ``views`` (view files relative to the rig file, at least one), ``center``
+    (optional 3-vector, default the origin), ``scene`` (optional name), ``panorama`` (optional
+    ``{"color", "range", "width"}``). Unknown keys are refused with the nearest valid name."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / RIG_FILE_NAME
+    where = f"rig file {p}"
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{where}: not found") from None
+    except ValueError as exc:
+        raise ValueError(f"{where}: not valid JSON ({exc})") from None
+    check_keys(where, doc, ("format", "version", "scene", "center", "views", "panorama"),
+               required=("format", "version", "views"))
+    if doc["format"] != "ibr-rig" or doc["version"] != 1:
+        raise ValueError(f"{where}: expected format 'ibr-rig' version 1, got {doc['format']!r} {doc['version']!r}")
+    views = doc["views"]
+    if not isinstance(views, list) or not views or not all(isinstance(v, str) for v in views):
+        raise ValueError(f"{where}: 'views' must be a non-empty list of view file names")
+    paths = tuple(p.parent / check_relative_path(f"{where}: 'views'", v) for v in views)
+    try:
+        center = _center(doc.get("center", (0.0, 0.0, 0.0)))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+    pano = doc.get("panorama")
+    if pano is not None:
+        check_keys(f"{where}: 'panorama'", pano, ("color", "range", "width"), required=("color", "range"))
+        pano = tuple(p.parent / check_relative_path(f"{where}: 'panorama' {k!r}", pano[k]) for k in ("color", "range"))
+    return RigFile(paths, center, pano)
