@@ -131,14 +131,34 @@ def add_interpolate_arguments(parser) -> None:
 def _check_interpolate_args(args) -> int:
     if len(args.views) != 1:
         raise ValueError(f"views: a sequence is up-converted on its own, got {len(args.views)} arguments")
-    for opt, given in (("--frames", args.frames is not None), ("--t", bool(args.t)), ("--scene", bool(args.scene)),
-                       ("--contact-sheet", bool(getattr(args, "contact_sheet", None)))):
+    for opt, given, instead in (("--frames", args.frames is not None, " (use --factor)"),
+                                ("--t", bool(args.t), " (use --factor)"), ("--scene", bool(args.scene), ""),
+                                ("--contact-sheet", bool(getattr(args, "contact_sheet", None)), "")):
         if given:
-            raise ValueError(f"{opt}: not used with a sequence (use --factor)")
+            raise ValueError(f"{opt}: not used with a sequence{instead}")
     factor = 4 if args.factor is None else args.factor
     if factor < 1:
         raise ValueError(f"--factor: expected an integer >= 1, got {factor}")
     return factor
+
+
+def _check_keys_listed(seq) -> None:
+    """Before any frame: at least two views, each with depth (its view file's 'depth' is not
+    null), named as the sequence file lists them (the library's checks came after frame 1 and
+    named its own parameters, "keys" / "view_b")."""
+    import json
+
+    if len(seq) < 2:
+        raise ValueError(f"SEQ: {seq.source} lists {len(seq)} view(s) in its 'views'; a sequence to up-convert "
+                         "needs at least 2")
+    for i, path in enumerate(seq.views):
+        try:
+            depth = json.loads(path.read_text(encoding="utf-8")).get("depth")
+        except (OSError, ValueError, AttributeError):
+            continue  # unreadable: load_view names the problem when the view is reached
+        if depth is None:
+            raise ValueError(f"SEQ: view {i} of {seq.source} ({path.name}) has no depth; every key of an "
+                             "up-conversion needs depth")
 
 
 def _truth_sequence(args, seq, factor, n_out):
@@ -153,8 +173,13 @@ def _truth_sequence(args, seq, factor, n_out):
     if seq.truth_factor not in (None, factor) and not args.truth:
         info(f"interpolate: ground truth {path} is for --factor {seq.truth_factor}, not {factor}: not scored")
         return None
-    if len(truth) < n_out:
-        raise ValueError(f"--truth: {path} has {len(truth)} frames, the up-conversion writes {n_out}")
+    what = "--truth" if args.truth else f"SEQ: its ground truth {path}"
+    # the truth of N keys at factor F: (N - 1) F + 1 frames, or N F with the extrapolated tail
+    fits = {(len(seq) - 1) * factor + 1, len(seq) * factor}
+    if len(truth) < n_out or len(truth) not in fits:
+        raise ValueError(f"{what}: {len(truth)} frames, but {len(seq)} keys at --factor {factor} make "
+                         f"{' or '.join(map(str, sorted(fits)))} (the up-conversion writes {n_out}): "
+                         "not the truth of these keys")
     return truth
 
 
@@ -195,6 +220,7 @@ def run_interpolate(args) -> int:
 
     factor = _check_interpolate_args(args)
     seq = load_sequence(args.views[0])
+    _check_keys_listed(seq)
     n_out = frame_count(len(seq), factor, tail=not args.no_tail)
     truth = _truth_sequence(args, seq, factor, n_out)
     ext = "." + args.format

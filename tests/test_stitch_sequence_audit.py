@@ -330,3 +330,29 @@ def test_stitch_refuses_options_it_would_ignore(manifest, tmp_path, capsys):
     assert _cli("stitch", manifest, manifest, "-o", tmp_path / "f3.png", "--width", 16, "--depth-out", "none") == 1
     assert "-o: with sequences the output is a folder" in capsys.readouterr().err
     assert not (tmp_path / "f3.png").exists() and not (tmp_path / "m.png").exists()
+
+
+def test_interpolate_sequence_checks_its_keys_and_truth_before_any_frame(tmp_path, capsys):
+    """A manifest of one view said "keys: ..." (a library parameter), a key without depth was found
+    after frame 1 ("view_b: ... has no depth"), a ground truth of another key count was scored
+    against frames that do not match, and --contact-sheet was told to "use --factor"."""
+    from ibr.sequence import save_sequence
+
+    views = [_view(0), _view(1, x=0.01), _view(2, x=0.02)]
+    for d in ("one", "nd", "t", "k"):
+        (tmp_path / d).mkdir()
+    one = save_sequence(views[:1], tmp_path / "one" / "s.json")
+    assert _cli("interpolate", one, "--factor", 2, "--out", tmp_path / "o1") == 1
+    assert "SEQ: " in (err := capsys.readouterr().err) and "lists 1 view(s) in its 'views'" in err
+    flat = View(views[1].color, None, views[1].camera, "flat")
+    nodepth = save_sequence([views[0], flat], tmp_path / "nd" / "s.json")
+    assert _cli("interpolate", nodepth, "--factor", 2, "--out", tmp_path / "o2") == 1
+    assert "SEQ: view 1 of" in (err := capsys.readouterr().err) and "has no depth" in err
+    truth = save_sequence(views * 3, tmp_path / "t" / "truth.json")  # 9 frames: not 2 keys at factor 2
+    keys = save_sequence(views[:2], tmp_path / "k" / "s.json", ground_truth={"sequence": "../t/truth.json",
+                                                                              "factor": 2})
+    assert _cli("interpolate", keys, "--factor", 2, "--out", tmp_path / "o3") == 1
+    assert "SEQ: its ground truth" in (err := capsys.readouterr().err) and "9 frames, but 2 keys at --factor 2 make 3 or 4" in err
+    assert _cli("interpolate", keys, "--factor", 2, "--out", tmp_path / "o4", "--contact-sheet", tmp_path / "c.png") == 1
+    assert "--contact-sheet: not used with a sequence" in (err := capsys.readouterr().err) and "--factor" not in err
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith("o") and p.name != "one"]  # no frames written

@@ -302,8 +302,8 @@ def stitch_photos(images, *, width: int | None = None, names=None, masks=None, f
         if est is not None:
             for k in est.used:
                 report.images[k].drop("no_match", "matches no other photo well enough")
-        raise ValueError("images: no two of the {} photos could be stitched together (give focal_px to "
-                         "place a single photo):\n{}".format(n, report.table()))
+        raise ValueError("images: no two of the {} photos could be stitched together (a known focal length, "
+                         "focal_px or the CLI's --focal, places a single photo):\n{}".format(n, report.table()))
 
     cameras: list = [None] * n
     for k, r, f in zip(est.used, est.rotations, est.focals):
