@@ -208,6 +208,18 @@ def first_run_kernels(args):
     return FRAME_KERNELS, "frame"
 
 
+def _check_pair(path_a, view_a, path_b, view_b) -> None:
+    """The library's source checks, naming the positionals A / B (not ``view_a`` / ``view_b``):
+    both views hold depth and have one size."""
+    for name, path, view in (("A", path_a, view_a), ("B", path_b, view_b)):
+        if view.depth is None:
+            raise ValueError(f"{name}: {path} has no depth, so it cannot be a source (a view without depth can "
+                             "only give a target camera)")
+    if view_a.shape != view_b.shape:
+        raise ValueError(f"B: {path_b} is {view_b.camera.width}x{view_b.camera.height}, A ({path_a}) is "
+                         f"{view_a.camera.width}x{view_a.camera.height}; both sources must have the same size")
+
+
 def run(args) -> int:
     import time
     from pathlib import Path
@@ -264,6 +276,7 @@ def run(args) -> int:
         from ibr.render.view_synthesis import iter_interpolate, source_mesh
 
         view_a, view_b = load_view(path_a), load_view(path_b)
+        _check_pair(path_a, view_a, path_b, view_b)
         # the inputs read: say that numba compiles (not before a view without depth is refused)
         modules, warm = first_run_kernels(args)
         with_depth = view_a.depth is not None and view_b.depth is not None

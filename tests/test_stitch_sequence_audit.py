@@ -356,3 +356,16 @@ def test_interpolate_sequence_checks_its_keys_and_truth_before_any_frame(tmp_pat
     assert _cli("interpolate", keys, "--factor", 2, "--out", tmp_path / "o4", "--contact-sheet", tmp_path / "c.png") == 1
     assert "--contact-sheet: not used with a sequence" in (err := capsys.readouterr().err) and "--factor" not in err
     assert not [p for p in tmp_path.iterdir() if p.name.startswith("o") and p.name != "one"]  # no frames written
+
+
+def test_interpolate_pair_names_a_and_b(tmp_path, capsys):
+    """The pair's source checks named the library's view_a / view_b."""
+    from ibr.io import save_view
+
+    a = save_view(_view(0), tmp_path / "a.json")
+    flat = save_view(View(_view(1).color, None, _view(1).camera, "flat"), tmp_path / "flat.json")
+    big = save_view(_view(2, w=20, h=15), tmp_path / "big.json")
+    assert _cli("interpolate", a, flat, "--out", tmp_path / "o") == 1
+    assert "error: B: " in (err := capsys.readouterr().err) and "flat.json has no depth" in err
+    assert _cli("interpolate", a, big, "--out", tmp_path / "o") == 1
+    assert "B: " in (err := capsys.readouterr().err) and "big.json is 20x15, A (" in err and "view_b" not in err
