@@ -257,7 +257,7 @@ def run(args) -> int:
             from panorama.stitch import check_rgbd_panorama
 
             panorama = check_rgbd_panorama(read_image(args.panorama[0], what="--panorama COLOR"),
-                                           read_depth(args.panorama[1], what="--panorama RANGE"),
+                                           read_depth(args.panorama[1], what="--panorama RANGE", name_channel=""),
                                            names=("--panorama COLOR", "--panorama RANGE"))
             views, n = None, 6
         else:

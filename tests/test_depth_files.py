@@ -38,8 +38,10 @@ def test_blender_file_output_rgb_exr(tmp_path):
     bad = rgba.copy()
     bad[3, 4, 1] += 0.25
     write_image(tmp_path / "bad.exr", bad)
-    with pytest.raises(ValueError, match=r"differ at 1 pixel\(s\) \(R vs G\).*\"channel\" key"):
+    with pytest.raises(ValueError, match=r"differ at 1 pixel\(s\) \(R vs G\).*name the depth channel with channel="):
         read_depth(tmp_path / "bad.exr")
+    with pytest.raises(ValueError, match=r"a colour image, not a depth pass\?$"):  # no way to name one
+        read_depth(tmp_path / "bad.exr", what="--panorama RANGE", name_channel="")
 
 
 def test_blender_multilayer_exr_picks_the_depth_pass(tmp_path):

@@ -375,10 +375,11 @@ def _pick_depth_channel(names: list[str], channel: str | None, path: Path, what:
     return None
 
 
-def _depth_array(path: Path, channel: str | None, what: str) -> np.ndarray:
+def _depth_array(path: Path, channel: str | None, what: str, name_it: str = "") -> np.ndarray:
     """(H, W) stored depth values: the named channel, the one depth-named channel, or the one
     value of an RGB(A) file whose colour channels agree (Blender's File Output node writes
-    R = G = B = Z)."""
+    R = G = B = Z). ``name_it``: how the caller's user names a channel (a view file's "channel"
+    key), added to the errors of a file whose depth channel cannot be told."""
     names = depth_channel_names(path, what=what)
     a = read_image(path, what=what)
     if a.ndim == 2:
@@ -391,7 +392,7 @@ def _depth_array(path: Path, channel: str | None, what: str) -> np.ndarray:
     colour = [i for i, n in enumerate(names) if n.split(".")[-1] in ("R", "G", "B")]
     if len(colour) < 2:
         raise ValueError(f"{what}: {path} has {len(names)} channels ({', '.join(names)}) and none is a depth "
-                         f"channel; name it with the view file's \"channel\" key")
+                         f"channel{name_it}")
     first = a[..., colour[0]]
     for i in colour[1:]:
         same = (a[..., i] == first) | (np.isnan(a[..., i]) & np.isnan(first)) if a.dtype.kind == "f" \
@@ -400,12 +401,12 @@ def _depth_array(path: Path, channel: str | None, what: str) -> np.ndarray:
             bad = int((~same).sum())
             raise ValueError(f"{what}: {path} has {len(names)} channels ({', '.join(names)}) whose values "
                              f"differ at {bad} pixel(s) ({names[colour[0]]} vs {names[i]}): a colour image, not a "
-                             f"depth pass? Name the depth channel with the view file's \"channel\" key")
+                             f"depth pass?{name_it}")
     return np.ascontiguousarray(first)
 
 
 def read_depth(path, *, scale: float | None = None, channel: str | None = None,
-               what: str = "depth", blender_markers: bool = True) -> np.ndarray:
+               what: str = "depth", blender_markers: bool = True, name_channel: str = "channel=") -> np.ndarray:
     """Read a depth (or disparity, or any per-pixel scalar) file as float32, as tools write them.
 
     Parameters
@@ -426,6 +427,9 @@ def read_depth(path, *, scale: float | None = None, channel: str | None = None,
     blender_markers : bool
         Read 1e10 and 65504 as "no surface" (depth passes); False for stored values that are no
         depth pass (disparity, window depth, z'), where 65504 is a value like any other.
+    name_channel : str
+        How the caller's user names a channel, suggested when a file's depth channel cannot be
+        told ("" when there is no way: a CLI option without a channel).
 
     Returns
     -------
@@ -435,7 +439,8 @@ def read_depth(path, *, scale: float | None = None, channel: str | None = None,
         raise ValueError(f"{what}: channel must be a non-empty string, got {channel!r}")
     if scale is not None and not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
         raise ValueError(f"{what}: scale must be a positive number, got {scale!r}")
-    return _depth_values(_depth_array(Path(path), channel, what), path, scale=scale, what=what,
+    name_it = f"; name the depth channel with {name_channel}" if name_channel else ""
+    return _depth_values(_depth_array(Path(path), channel, what, name_it), path, scale=scale, what=what,
                         blender_markers=blender_markers)
 
 

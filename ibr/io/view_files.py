@@ -187,7 +187,7 @@ def _read_stored_depth(path: Path, encoding: str, p: dict, where: str,
                        channel: str | None = None) -> tuple[np.ndarray, bool]:
     """The depth file's values as stored (fixed codes) or scaled (:func:`read_depth`), and whether
     the file holds integer codes (whatever its extension: a uint16 TIFF as a 16-bit PNG)."""
-    raw = _depth_array(path, channel, where)
+    raw = _depth_array(path, channel, where, "; name the depth channel with the view file's \"channel\" key")
     if encoding in _FIXED_BITS:
         if raw.dtype.kind == "f":  # codes stored in a float file must be integers
             if not np.all(np.isfinite(raw) & (raw == np.rint(raw)) & (raw >= 0)):
