@@ -98,10 +98,9 @@ def run(args) -> int:
                       supersample=args.supersample)
         dt = time.perf_counter() - t0
         line = f"warp: {dt * 1e3:.1f} ms, holes {result.hole_fraction:.3%} (filled {result.filled.mean():.3%})"
-        if isinstance(target, View) and target.color.shape == result.color.shape:
-            cov = ~result.holes
-            a, b = _to_float(result.color)[cov], _to_float(target.color)[cov]
-            covered_db = 10 * np.log10(1.0 / max(float(np.mean((a - b) ** 2)), 1e-20))
+        if isinstance(target, View) and target.color.shape == result.color.shape and not result.holes.all():
+            cov = ~result.holes  # the same PSNR as the whole image's (inf for an exact copy, was 200.00)
+            covered_db = psnr(_to_float(result.color)[cov][None], _to_float(target.color)[cov][None])
             line += f", PSNR over covered pixels {covered_db:.2f} dB vs {Path(args.to).name}"
             if args.fill != "none":
                 line += f" (whole image: {psnr(result.color, target.color):.2f} dB)"

@@ -369,3 +369,12 @@ def test_interpolate_pair_names_a_and_b(tmp_path, capsys):
     assert "error: B: " in (err := capsys.readouterr().err) and "flat.json has no depth" in err
     assert _cli("interpolate", a, big, "--out", tmp_path / "o") == 1
     assert "B: " in (err := capsys.readouterr().err) and "big.json is 20x15, A (" in err and "view_b" not in err
+
+
+def test_warp_to_its_own_camera_scores_inf_twice(tmp_path, capsys):
+    """An exact copy printed "PSNR over covered pixels 200.00 dB ... (whole image: inf dB)"."""
+    from ibr.io import save_view
+
+    a = save_view(_view(0), tmp_path / "a.json")
+    assert _cli("warp", a, "--to", a, "-o", tmp_path / "x.png") == 0
+    assert "PSNR over covered pixels inf dB vs a.json (whole image: inf dB)" in capsys.readouterr().err
