@@ -424,3 +424,17 @@ def test_other_tools_fx_key_is_ignored_and_a_list_encoding_named(tmp_path):
     (tmp_path / "w.json").write_text(json.dumps(doc))
     with pytest.raises(ValueError, match="encoding"):
         load_view(tmp_path / "w.json")
+
+
+def test_tum_missing_image_names_its_list_file(tmp_path):
+    """A depth image deleted from a TUM folder was reported as "listed in tum" (the folder), not
+    the list file that names it."""
+    _tum(tmp_path / "tum")
+    (tmp_path / "tum" / "depth_1.png").unlink()
+    with pytest.raises(FileNotFoundError, match=re.escape(f"depth_1.png (listed in {tmp_path / 'tum' / 'depth.txt'}) is missing")):
+        read_frames("tum", tmp_path / "tum", intrinsics=(50.0, 50.0, 31.5, 23.5))
+    _tum(tmp_path / "tum2")
+    (tmp_path / "tum2" / "rgb_1.png").unlink()
+    with pytest.raises(FileNotFoundError, match=re.escape(f"(listed in {tmp_path / 'tum2' / 'rgb.txt'})")):
+        read_frames("tum", tmp_path / "tum2", intrinsics=(50.0, 50.0, 31.5, 23.5))
+
