@@ -438,3 +438,12 @@ def test_tum_missing_image_names_its_list_file(tmp_path):
     with pytest.raises(FileNotFoundError, match=re.escape(f"(listed in {tmp_path / 'tum2' / 'rgb.txt'})")):
         read_frames("tum", tmp_path / "tum2", intrinsics=(50.0, 50.0, 31.5, 23.5))
 
+
+def test_an_empty_frames_list_is_called_empty(tmp_path):
+    """``"frames": []`` was reported as "has no 'frames' list"."""
+    (tmp_path / "t.json").write_text(json.dumps({"fl_x": 10, "w": 4, "h": 4, "frames": []}))
+    with pytest.raises(ValueError, match="'frames' is an empty list"):
+        read_frames("nerf", tmp_path / "t.json")
+    (tmp_path / "t.json").write_text(json.dumps({"fl_x": 10, "w": 4, "h": 4}))
+    with pytest.raises(ValueError, match="has no 'frames' list"):
+        read_frames("nerf", tmp_path / "t.json")
