@@ -39,7 +39,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--script", action="store_true",
                         help="blender: print the path of the script to run inside Blender "
                         "(blender -b scene.blend --python PATH -- --out DIR [--all-cameras] [--multilayer])")
-    parser.add_argument("--images", help="colmap: the image folder (default: SRC/../images)")
+    parser.add_argument("--images", help="colmap: the image folder (default: SRC/../images or SRC/../../images, "
+                        "the first that exists: project/sparse or project/sparse/0 beside project/images)")
     parser.add_argument("--depth", help="colmap: folder of depth maps (NAME.geometric.bin or <stem>.exr/.png)")
     parser.add_argument("--depth-scale", type=positive_float, default=None,
                         help="scene units per stored depth unit (e.g. 0.001 for millimetre PNGs)")
@@ -95,8 +96,8 @@ def run(args) -> int:
         raise ValueError("--out: the folder for the view files is required")
     report = ImportReport()
     options = {"depth_scale": args.depth_scale}
-    if args.format == "colmap":
-        options.update(images=args.images, depth=args.depth)
+    if args.format == "colmap":  # messages name the options as the user wrote them
+        options.update(images=args.images, depth=args.depth, labels={"images": "--images", "depth": "--depth"})
     if args.format == "tum":
         options.update(intrinsics=args.intrinsics, tolerance=args.tolerance)
     frames = read_frames(args.format, args.src[0], report=report, **options)  # every entry checked first

@@ -447,3 +447,57 @@ def test_an_empty_frames_list_is_called_empty(tmp_path):
     (tmp_path / "t.json").write_text(json.dumps({"fl_x": 10, "w": 4, "h": 4}))
     with pytest.raises(ValueError, match="has no 'frames' list"):
         read_frames("nerf", tmp_path / "t.json")
+
+
+def _colmap_sparse0(root: Path) -> Path:
+    """The pair as COLMAP writes a project: root/images, root/depth and root/sparse/0."""
+    (root / "depth").mkdir(parents=True)
+    _colmap_model(root)
+    (root / "sparse" / "0").mkdir()
+    for f in ("cameras.txt", "images.txt"):
+        (root / "sparse" / f).rename(root / "sparse" / "0" / f)
+    return root / "sparse" / "0"
+
+
+def test_colmap_depth_folder_problems_name_depth_and_each_skipped_image(tmp_path, capsys):
+    """A wrong --depth folder said only "no usable image in images.txt" (no reason, no --depth);
+    one depth map missing printed "1/1 frames" without saying that one of two images was left out."""
+    model = _colmap_sparse0(tmp_path / "cm")
+    images = str(tmp_path / "cm" / "images")
+    base = ["import", "colmap", str(model), "--images", images]
+    assert cli.main(base + ["--depth", str(tmp_path / "nodir"), "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert f"--depth: {tmp_path / 'nodir'} does not exist" in err and len(err.strip().splitlines()) == 1
+    (tmp_path / "empty").mkdir()
+    assert cli.main(base + ["--depth", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert f"none of the 2 image(s) of {model / 'images.txt'} has a depth map in --depth {tmp_path / 'empty'}" in err
+    assert "camA_0001.png.geometric.bin" in err and "camA_0001{.exr," in err
+    assert not (tmp_path / "o").exists()
+    (tmp_path / "d1").mkdir()
+    shutil.copy(tmp_path / "cm" / "depth" / "camA_0001.exr", tmp_path / "d1")
+    assert cli.main(base + ["--depth", str(tmp_path / "d1"), "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert f"1 of 2 images skipped: camB_0001.png: no depth map in --depth {tmp_path / 'd1'}" in err
+    assert sorted(p.name for p in (tmp_path / "o").glob("*.json")) == ["camA_0001.json"]
+    with pytest.raises(FileNotFoundError, match="depth: .* does not exist"):  # the library names its argument
+        read_frames("colmap", model, images=images, depth=tmp_path / "nodir")
+
+
+def test_colmap_default_image_folder_finds_the_project_layout(tmp_path, capsys):
+    """The default --images was SRC/../images: sparse/images for COLMAP's project/sparse/0 layout.
+    It now tries SRC/../images, then SRC/../../images, and says which it tried when none exists."""
+    model = _colmap_sparse0(tmp_path / "cm")
+    assert [f.color for f in read_frames("colmap", model)] == [tmp_path / "cm" / "images" / f"{n}.png" for n in NAMES]
+    assert cli.main(["import", "colmap", str(model), "--out", str(tmp_path / "o")]) == 0
+    capsys.readouterr()
+    _colmap_model(tmp_path / "flat")  # project/sparse beside project/images
+    assert read_frames("colmap", tmp_path / "flat" / "sparse")[0].color.parent == tmp_path / "flat" / "images"
+    shutil.rmtree(tmp_path / "cm" / "images")
+    assert cli.main(["import", "colmap", str(model), "--out", str(tmp_path / "o2")]) == 1
+    err = capsys.readouterr().err
+    assert (f"no image folder beside {model} (tried {tmp_path / 'cm' / 'sparse' / 'images'}, "
+            f"{tmp_path / 'cm' / 'images'}); pass --images DIR") in err
+    assert cli.main(["import", "colmap", str(model), "--images", str(tmp_path / "nope"), "--out", str(tmp_path / "o2")]) == 1
+    assert f"--images: {tmp_path / 'nope'} does not exist" in capsys.readouterr().err
+    assert not (tmp_path / "o2").exists()

@@ -44,11 +44,19 @@ class ImportReport:
     dropped: list[tuple[str, str]] = field(default_factory=list)
     ignored_keys: list[str] = field(default_factory=list)
     sequence: Path | None = None
+    listed: int | None = None  # how many entries the source listed (default: written + dropped)
+    unit: str = "frames"       # what the source lists ("images" for COLMAP)
 
     def lines(self) -> list[str]:
         out = [f"{len(self.written)} view file(s) written"
                + (f", sequence {self.sequence.name}" if self.sequence else "")]
-        out += [f"dropped {name}: {why}" for name, why in self.dropped]
+        if self.dropped:  # how many of how many, and why each
+            total = self.listed if self.listed is not None else len(self.written) + len(self.dropped)
+            head = f"{len(self.dropped)} of {total} {self.unit} skipped"
+            if len(self.dropped) == 1:
+                out.append(f"{head}: {self.dropped[0][0]}: {self.dropped[0][1]}")
+            else:
+                out += [f"{head}:"] + [f"  {name}: {why}" for name, why in self.dropped]
         if self.ignored_keys:
             out.append("ignored keys (not used by ibr): " + ", ".join(sorted(set(self.ignored_keys))))
         return out
