@@ -46,9 +46,30 @@ def add_arguments(parser) -> None:
                         help="scene units per stored depth unit (e.g. 0.001 for millimetre PNGs)")
     parser.add_argument("--intrinsics", type=float, nargs=4, metavar=("FX", "FY", "CX", "CY"),
                         help="tum: camera intrinsics in pixels (default the ROS set 525 525 319.5 239.5)")
-    parser.add_argument("--tolerance", type=positive_float, default=0.02,
-                        help="tum: max time difference (s) when associating colour, depth and poses")
+    parser.add_argument("--tolerance", type=positive_float, default=None,
+                        help="tum: max time difference (s) when associating colour, depth and poses (default 0.02)")
     parser.add_argument("--name", default=None, help="name of the sequence manifest (default: the format)")
+
+
+#: The options (and SRC) each format uses; any other given is refused, naming it (they were
+#: accepted and silently ignored: ``ibr import nerf ... --intrinsics 1 2 3 4``).
+_USES = {"nerf": ("SRC", "--out", "--depth-scale", "--name"),
+         "colmap": ("SRC", "--out", "--depth-scale", "--name", "--images", "--depth"),
+         "tum": ("SRC", "--out", "--depth-scale", "--name", "--intrinsics", "--tolerance"),
+         "blender": ("--script",),
+         "export-nerf": ("SRC", "--out")}
+
+
+def _check_options_apply(args) -> None:
+    given = {"SRC": bool(args.src), "--out": args.out is not None, "--script": args.script,
+             "--images": args.images is not None, "--depth": args.depth is not None,
+             "--depth-scale": args.depth_scale is not None, "--intrinsics": args.intrinsics is not None,
+             "--tolerance": args.tolerance is not None, "--name": args.name is not None}
+    stray = [o for o, g in given.items() if g and o not in _USES[args.format]]
+    if stray:
+        where = [f"{o} ({', '.join(f for f, uses in _USES.items() if o in uses)} only)" for o in stray]
+        raise ValueError(f"{', '.join(where)}: not used by `ibr import {args.format}`; remove "
+                         f"{'it' if len(stray) == 1 else 'them'}")
 
 
 def _export(args) -> int:
@@ -82,6 +103,7 @@ def run(args) -> int:
     from ibr.io.importers.common import ImportReport, check_sequence_name
     from ibr.io.outputs import OutputPlan
 
+    _check_options_apply(args)
     if args.format == "blender":
         if not args.script:
             raise ValueError("blender: renders are imported by the script run inside Blender; "
@@ -99,7 +121,7 @@ def run(args) -> int:
     if args.format == "colmap":  # messages name the options as the user wrote them
         options.update(images=args.images, depth=args.depth, labels={"images": "--images", "depth": "--depth"})
     if args.format == "tum":
-        options.update(intrinsics=args.intrinsics, tolerance=args.tolerance)
+        options.update(intrinsics=args.intrinsics, tolerance=0.02 if args.tolerance is None else args.tolerance)
     frames = read_frames(args.format, args.src[0], report=report, **options)  # every entry checked first
     with OutputPlan("ibr import", log=info) as plan:
         plan.add_input("SRC", args.src[0])

@@ -501,3 +501,22 @@ def test_colmap_default_image_folder_finds_the_project_layout(tmp_path, capsys):
     assert cli.main(["import", "colmap", str(model), "--images", str(tmp_path / "nope"), "--out", str(tmp_path / "o2")]) == 1
     assert f"--images: {tmp_path / 'nope'} does not exist" in capsys.readouterr().err
     assert not (tmp_path / "o2").exists()
+
+
+def test_options_of_another_format_are_refused_by_name(tmp_path, capsys):
+    """``ibr import nerf ... --intrinsics 1 2 3 4 --images foo`` was accepted and the options
+    silently ignored; an option the chosen format does not use is refused, naming it."""
+    src = str(RGB / "transforms.json")
+    for argv, named in ((["nerf", src, "--intrinsics", "1", "2", "3", "4", "--images", "foo"],
+                         "--images (colmap only), --intrinsics (tum only): not used by `ibr import nerf`"),
+                        (["nerf", src, "--tolerance", "0.1"], "--tolerance (tum only)"),
+                        (["tum", str(tmp_path), "--depth", "d"], "--depth (colmap only)"),
+                        (["export-nerf", str(RGB / "camA_0001.json"), "--depth-scale", "2"], "--depth-scale ("),
+                        (["blender", "--script", "--out", "x"], "--out (")):
+        out = tmp_path / "out"
+        assert cli.main(["import", *argv] + ([] if "--out" in argv else ["--out", str(out)])) == 1, argv
+        assert named in capsys.readouterr().err
+        assert not out.exists()
+    _tum(tmp_path / "tum")  # the options a format uses still work
+    assert cli.main(["import", "tum", str(tmp_path / "tum"), "--tolerance", "0.02", "--intrinsics", "50", "50",
+                     "31.5", "23.5", "--out", str(tmp_path / "t")]) == 0
