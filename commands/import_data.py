@@ -16,13 +16,21 @@ HELP = ("import RGB-D data from other tools (NeRF transforms.json, COLMAP, TUM R
         "as view files, or export view files as transforms.json")
 
 
-def _written_names(frames, sequence_name: str) -> tuple:
-    """The exact file names an import writes into ``--out`` (escaped as glob patterns): each
-    frame's view file, colour and depth, and the manifest. Only these are replaced there; a bare
-    ``*.json`` pattern removed every JSON file of the folder, the user's own included (#12)."""
+def _written_names(frames, sequence_name: str, out) -> tuple:
+    """The exact file names an import owns in ``--out`` (escaped as glob patterns): each frame's
+    view file, colour and depth, and the manifest. Only these are replaced there; a bare
+    ``*.json`` pattern removed every JSON file of the folder, the user's own included (#12).
+
+    The manifest is written for several frames; a one-frame import still owns an earlier import's
+    manifest of that name (an ``ibr-sequence`` file, not a user's other JSON), which the commit
+    then removes: it listed the earlier frames next to the new one (a stale sequence)."""
     import glob
 
-    names = [f"{sequence_name}.json"] if len(frames) > 1 else []  # the manifest (write_views)
+    from ibr.io.importers.common import is_sequence_manifest
+
+    manifest = f"{sequence_name}.json"
+    owned = len(frames) > 1 or is_sequence_manifest(Path(out) / manifest)
+    names = [manifest] if owned else []  # the manifest (write_views)
     for f in frames:
         names += [f"{f.name}.json", f"{f.name}_color.png", f"{f.name}_color.exr", f"{f.name}_depth.exr"]
     return tuple(glob.escape(n).replace("#", "[#]") for n in names)  # '#' in a pattern means digits
@@ -130,7 +138,7 @@ def run(args) -> int:
             plan.add_input("SRC", f.depth)
         if len(frames) > 1:
             check_sequence_name(args.name or args.format, [f.name for f in frames])  # before any work
-        folder = plan.add_folder("--out", args.out, _written_names(frames, args.name or args.format))
+        folder = plan.add_folder("--out", args.out, _written_names(frames, args.name or args.format, args.out))
         plan.check()
         write_views(frames, plan.stage(folder), report, sequence_name=args.name or args.format,
                     progress=lambda k, n: info(f"import: {k}/{n} frames") if k == n or k % 10 == 0 else None)

@@ -520,3 +520,28 @@ def test_options_of_another_format_are_refused_by_name(tmp_path, capsys):
     _tum(tmp_path / "tum")  # the options a format uses still work
     assert cli.main(["import", "tum", str(tmp_path / "tum"), "--tolerance", "0.02", "--intrinsics", "50", "50",
                      "31.5", "23.5", "--out", str(tmp_path / "t")]) == 0
+
+
+def test_a_one_frame_import_does_not_leave_an_earlier_manifest(tmp_path, capsys):
+    """A one-frame transforms.json imported into the folder of an earlier two-frame import left
+    the old nerf.json listing both views (the old camA beside the new camB): the import owns its
+    manifest name, so the stale manifest is removed with the commit (staged, nothing on failure).
+    A user's own JSON of that name that is no manifest is left alone."""
+    t = json.loads((RGB / "transforms.json").read_text())
+    for f in RGB.glob("cam*_*.*"):
+        shutil.copy(f, tmp_path)
+    t1 = dict(t, frames=t["frames"][:1])
+    (tmp_path / "one.json").write_text(json.dumps(t1))
+    out = tmp_path / "out"
+    assert cli.main(["import", "nerf", str(RGB / "transforms.json"), "--out", str(out)]) == 0
+    assert len(json.loads((out / "nerf.json").read_text())["views"]) == 2
+    assert cli.main(["import", "nerf", str(tmp_path / "one.json"), "--out", str(out)]) == 0
+    assert not (out / "nerf.json").exists()
+    assert "removed 1 file(s) of an earlier run" in capsys.readouterr().err
+    (out / "nerf.json").write_text('{"mine": 1}\n')  # not a manifest: the user's file
+    assert cli.main(["import", "nerf", str(tmp_path / "one.json"), "--out", str(out)]) == 0
+    assert (out / "nerf.json").read_text() == '{"mine": 1}\n'
+    # the library writes into the folder directly: the same
+    import_views("nerf", RGB / "transforms.json", tmp_path / "lib")
+    import_views("nerf", tmp_path / "one.json", tmp_path / "lib")
+    assert not (tmp_path / "lib" / "nerf.json").exists()

@@ -112,6 +112,15 @@ def _load_frame(f: Frame) -> View:
     return View(color, depth, f.camera, f.name)
 
 
+def is_sequence_manifest(path) -> bool:
+    """Whether ``path`` is an ``ibr-sequence`` manifest (as an earlier import wrote it)."""
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return False
+    return isinstance(doc, dict) and doc.get("format") == SEQUENCE_FORMAT
+
+
 def check_sequence_name(name, frame_names) -> None:
     """``name`` of an import's sequence manifest (``<name>.json`` in the output folder): a plain
     file name (``../../transforms`` wrote over the input), and no frame's name (``r_0`` replaced
@@ -129,7 +138,8 @@ def write_views(frames: list[Frame], folder: Path, report: ImportReport, *, sequ
                 progress=None) -> ImportReport:
     """Load every frame and write ``<name>.json`` (+ PNG colour, EXR depth) into ``folder``; with
     more than one frame and ``sequence_name``, also ``<sequence_name>.json``, a sequence manifest
-    in the frames' order."""
+    in the frames' order. With one frame, an earlier import's manifest of that name in ``folder``
+    is removed (it listed the earlier frames: a stale sequence beside the new view)."""
     folder = Path(folder)
     names = [f.name for f in frames]
     if len(set(names)) != len(names):
@@ -151,4 +161,7 @@ def write_views(frames: list[Frame], folder: Path, report: ImportReport, *, sequ
                "views": [p.name for p in report.written]}
         seq.write_text(json.dumps(doc, indent=2) + "\n")
         report.sequence = seq
+    elif sequence_name and is_sequence_manifest(folder / f"{sequence_name}.json") \
+            and f"{sequence_name}.json" not in {p.name for p in report.written}:
+        (folder / f"{sequence_name}.json").unlink()
     return report
