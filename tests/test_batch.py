@@ -382,3 +382,28 @@ def test_failures_name_the_paths_as_the_job_wrote_them_and_missing_folders_are_r
     assert not (tmp_path / "out" / "no").exists() and path.read_bytes() == before
     assert not [p for p in tmp_path.rglob(f"{STAGE_PREFIX}*")]
 
+
+def test_batch_sees_every_form_of_an_output_option(tmp_path, views, capsys):
+    """A misspelt ``--objj out/x.obj`` was reported as "no output found" instead of the command's
+    own usage error; the attached ``-oout/k8.png`` was not seen as an output. ``ibr batch`` parses
+    each job with ibr's own parser: usage errors are refused up front with the command's message,
+    and outputs are found as the command reads them (attached, ``=`` and abbreviated forms)."""
+    save_view(views[0], tmp_path / "a.json")
+    save_view(views[1], tmp_path / "b.json")
+    (tmp_path / "out").mkdir()
+    path = tmp_path / "jobs.json"
+    path.write_text(json.dumps([["mesh", "a.json", "--objj", "out/x.obj"]]))
+    assert cli.main(["batch", str(path), "--workers", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "jobs[0]: ibr mesh: " in err and "unrecognized arguments: --objj out/x.obj" in err
+    assert "no output found" not in err
+    path.write_text(json.dumps([["warp", "a.json", "--to", "b.json", "-oout/k8.png"],
+                                ["warp", "a.json", "--to", "b.json", "--output=out/k9.png"],
+                                ["warp", "b.json", "--to", "a.json", "-o", "out/k10.png", "--depth-o", "out/k10.exr"]]))
+    assert [j.outputs for j in load_jobs(path)][0] == ("out/k8.png",)  # the library sees -oVALUE too
+    assert cli.main(["batch", str(path), "--workers", "1"]) == 0
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["k10.exr", "k10.png", "k8.png", "k9.png"]
+    record = json.loads(next((tmp_path / ".ibr-batch").glob("warp-*.json")).read_text())
+    assert record["outputs"]
+    records = [json.loads(p.read_text()) for p in (tmp_path / ".ibr-batch").glob("warp-*.json")]
+    assert sorted(o for r in records for o in r["outputs"]) == ["out/k10.exr", "out/k10.png", "out/k8.png", "out/k9.png"]

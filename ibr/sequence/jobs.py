@@ -12,7 +12,9 @@ A batch file lists jobs; a job is any ``ibr`` command line::
 ``ibr`` optional) is the command line; ``id`` (default: a hash of the command line) names the
 job's record; ``outputs`` lists the command-line values that are outputs (default: the values of
 ``-o/--out/--output/--video/--contact-sheet/--obj/--ply/--viz/--depth-out/--holes-out/--report/``
-``--coverage/--cube/--site``);
+``--coverage/--cube/--site``, in any form the command reads: ``-o x``, ``--out=x``, ``-ox``; with the
+``ibr`` parser (``load_jobs(path, parser=...)``, as ``ibr batch`` does) abbreviations too, and a
+command line the command would refuse as a usage error is refused up front with its message);
 ``inputs`` adds input files the command line does not name; ``cwd`` (default: the batch file's
 folder) is where relative paths start. Jobs are independent: no job may read another's output.
 
@@ -45,6 +47,7 @@ the command line, input and output checksums, the run and attempt that committed
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import hashlib
 import json
@@ -135,12 +138,19 @@ class Job:
                 "inputs": list(self.inputs)}
 
 
+#: Short output options, which argparse also takes attached to their value (``-oout/a.png``).
+_SHORT_OUTPUTS = tuple(o for o in OUTPUT_OPTIONS if len(o) == 2 and o[1] != "-")
+
+
 def _option_value_pairs(argv):
-    """(index, option, value) for ``--opt value`` and ``--opt=value`` forms."""
+    """(index, option, value) for ``--opt value``, ``--opt=value`` and, for the short output
+    options, the attached ``-oVALUE`` forms."""
     for i, a in enumerate(argv):
         if a.startswith("-") and "=" in a:
             opt, _, val = a.partition("=")
             yield i, opt, val
+        elif a[:2] in _SHORT_OUTPUTS and len(a) > 2:  # -oout/k8.png (was not seen as an output)
+            yield i, a[:2], a[2:]
         elif a.startswith("-") and i + 1 < len(argv):
             yield i + 1, a, argv[i + 1]
 
@@ -149,7 +159,49 @@ def _infer_outputs(argv) -> tuple:
     return tuple(val for _, opt, val in _option_value_pairs(argv) if opt in OUTPUT_OPTIONS)
 
 
-def _job_from(entry, index: int, base: Path) -> Job:
+def _on_command_line(argv, value: str) -> bool:
+    """Whether ``value`` is one of ``argv``'s tokens or the value of an option (``--x=value``,
+    ``-ovalue``): where the staging can redirect it."""
+    return value in argv or any(val == value for _, _, val in _option_value_pairs(argv)) or any(
+        a.startswith("-") and not a.startswith("--") and len(a) > 2 and a[2:] == value for a in argv)
+
+
+def _parse(parser, argv, where: str):
+    """``argv`` parsed by ``parser`` (the ``ibr`` command-line parser): a command line the command
+    would refuse as a usage error is refused here with the command's own message (a misspelt
+    ``--objj out/x.obj`` was reported as "no output found"). None for a ``--help`` line."""
+    import io
+
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            return parser.parse_args(list(argv))
+    except SystemExit as exc:
+        if not exc.code:
+            return None
+        lines = [line for line in err.getvalue().splitlines() if line.strip()]
+        message = re.sub(r"^[^:]*: error: ", "", lines[-1]) if lines else "the command line does not parse"
+        raise ValueError(f"{where}: ibr {argv[0]}: {message}") from None
+
+
+def _parsed_outputs(parser, args, argv) -> tuple:
+    """The values of ``argv``'s output options (:data:`OUTPUT_OPTIONS`) as ``parser`` read them:
+    abbreviations (``--ob`` for ``--obj``), ``--opt=value`` and ``-ovalue`` included."""
+    sub = next((a.choices.get(argv[0]) for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)
+    if sub is None or args is None:
+        return _infer_outputs(argv)
+    values = []
+    for action in sub._actions:
+        if not set(action.option_strings) & set(OUTPUT_OPTIONS):
+            continue
+        value = getattr(args, action.dest, None)
+        if value is None or value is action.default or isinstance(value, bool):
+            continue
+        values += [v for v in (value if isinstance(value, (list, tuple)) else [value]) if isinstance(v, str)]
+    return tuple(dict.fromkeys(values))
+
+
+def _job_from(entry, index: int, base: Path, parser=None) -> Job:
     where = f"jobs[{index}]"
     if isinstance(entry, (str, list)):
         entry = {"command": entry} if isinstance(entry, str) else {"argv": entry}
@@ -176,9 +228,10 @@ def _job_from(entry, index: int, base: Path) -> Job:
         raise ValueError(f"{where}: expected an ibr command line (e.g. 'stereo A.json -o A.png'), got {argv!r}")
     if argv[0] == "batch":
         raise ValueError(f"{where}: a batch job cannot run 'ibr batch'")
+    args = _parse(parser, argv, where) if parser is not None else None
     outputs = entry.get("outputs")
     if outputs is None:
-        outputs = _infer_outputs(argv)
+        outputs = _parsed_outputs(parser, args, argv) if parser is not None else _infer_outputs(argv)
     elif not isinstance(outputs, list) or not all(isinstance(o, str) and o for o in outputs):
         raise ValueError(f"{where}: 'outputs' must be a list of paths, got {outputs!r}")
     outputs = tuple(outputs)
@@ -186,7 +239,7 @@ def _job_from(entry, index: int, base: Path) -> Job:
         raise ValueError(f"{where}: no output found in {shlex.join(argv)!r}; name it with -o/--out or list the "
                          "command-line values that are outputs in 'outputs'")
     for o in outputs:
-        if o not in argv and not any(val == o for _, _, val in _option_value_pairs(argv)):
+        if not _on_command_line(argv, o):
             raise ValueError(f"{where}: output {o!r} does not appear on the command line {shlex.join(argv)!r}")
     inputs = entry.get("inputs", [])
     if not isinstance(inputs, list) or not all(isinstance(i, str) and i for i in inputs):
@@ -206,8 +259,13 @@ def _job_from(entry, index: int, base: Path) -> Job:
     return Job(job_id, tuple(argv), str(cwd), outputs, tuple(inputs))
 
 
-def load_jobs(path) -> list[Job]:
+def load_jobs(path, *, parser=None) -> list[Job]:
     """Read a batch file (module docstring) into jobs; relative paths start at its folder.
+
+    ``parser``: the ``ibr`` command-line parser (``cli.build_parser()``, as ``ibr batch`` passes
+    it): every job's command line is parsed first, a usage error refused with the command's own
+    message, and the outputs are found as the command reads its options (abbreviated ones too).
+    Without it, outputs are the values of :data:`OUTPUT_OPTIONS` spelt out.
 
     Raises
     ------
@@ -235,7 +293,7 @@ def load_jobs(path) -> list[Job]:
     if not isinstance(entries, list) or not entries:
         raise ValueError(f"jobs: {path}: expected a non-empty list of jobs (or an object with 'jobs'), got {entries!r}")
     base = path.resolve().parent
-    jobs = [_job_from(e, i, base) for i, e in enumerate(entries)]
+    jobs = [_job_from(e, i, base, parser) for i, e in enumerate(entries)]
     seen_ids, seen_out = {}, {}
     for i, j in enumerate(jobs):
         if j.id in seen_ids:
