@@ -397,6 +397,9 @@ def test_batch_sees_every_form_of_an_output_option(tmp_path, views, capsys):
     err = capsys.readouterr().err
     assert "jobs[0]: ibr mesh: " in err and "unrecognized arguments: --objj out/x.obj" in err
     assert "no output found" not in err
+    path.write_text(json.dumps([["interpolate", "a.json", "b.json"]]))  # its default --out is not on the line
+    with pytest.raises(ValueError, match="jobs\\[0\\]: no output found"):
+        load_jobs(path, parser=cli.build_parser())
     path.write_text(json.dumps([["warp", "a.json", "--to", "b.json", "-oout/k8.png"],
                                 ["warp", "a.json", "--to", "b.json", "--output=out/k9.png"],
                                 ["warp", "b.json", "--to", "a.json", "-o", "out/k10.png", "--depth-o", "out/k10.exr"]]))

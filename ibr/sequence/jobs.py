@@ -198,7 +198,8 @@ def _parsed_outputs(parser, args, argv) -> tuple:
         if value is None or value is action.default or isinstance(value, bool):
             continue
         values += [v for v in (value if isinstance(value, (list, tuple)) else [value]) if isinstance(v, str)]
-    return tuple(dict.fromkeys(values))
+    # a default output (interpolate's "out") is not on the command line: it cannot be redirected
+    return tuple(dict.fromkeys(v for v in values if _on_command_line(argv, v)))
 
 
 def _job_from(entry, index: int, base: Path, parser=None) -> Job:
