@@ -38,8 +38,10 @@ def run(args) -> int:
     from ibr.sequence.batch import run_batch
     from ibr.sequence.jobs import check_batch_files, load_jobs
 
+    import cli  # the parser ibr itself uses: each job's command line is checked as ibr would read it
+
     jobs_path = Path(args.jobs)
-    jobs = load_jobs(jobs_path)
+    jobs = load_jobs(jobs_path, parser=cli.build_parser())
     if args.workers is not None and args.workers < 1:
         raise ValueError(f"--workers: expected an integer >= 1, got {args.workers}")
     if args.threads_per_job < 1:

@@ -16,13 +16,21 @@ HELP = ("import RGB-D data from other tools (NeRF transforms.json, COLMAP, TUM R
         "as view files, or export view files as transforms.json")
 
 
-def _written_names(frames, sequence_name: str) -> tuple:
-    """The exact file names an import writes into ``--out`` (escaped as glob patterns): each
-    frame's view file, colour and depth, and the manifest. Only these are replaced there; a bare
-    ``*.json`` pattern removed every JSON file of the folder, the user's own included (#12)."""
+def _written_names(frames, sequence_name: str, out) -> tuple:
+    """The exact file names an import owns in ``--out`` (escaped as glob patterns): each frame's
+    view file, colour and depth, and the manifest. Only these are replaced there; a bare
+    ``*.json`` pattern removed every JSON file of the folder, the user's own included (#12).
+
+    The manifest is written for several frames; a one-frame import still owns an earlier import's
+    manifest of that name (an ``ibr-sequence`` file, not a user's other JSON), which the commit
+    then removes: it listed the earlier frames next to the new one (a stale sequence)."""
     import glob
 
-    names = [f"{sequence_name}.json"] if len(frames) > 1 else []  # the manifest (write_views)
+    from ibr.io.importers.common import is_sequence_manifest
+
+    manifest = f"{sequence_name}.json"
+    owned = len(frames) > 1 or is_sequence_manifest(Path(out) / manifest)
+    names = [manifest] if owned else []  # the manifest (write_views)
     for f in frames:
         names += [f"{f.name}.json", f"{f.name}_color.png", f"{f.name}_color.exr", f"{f.name}_depth.exr"]
     return tuple(glob.escape(n).replace("#", "[#]") for n in names)  # '#' in a pattern means digits
@@ -39,15 +47,37 @@ def add_arguments(parser) -> None:
     parser.add_argument("--script", action="store_true",
                         help="blender: print the path of the script to run inside Blender "
                         "(blender -b scene.blend --python PATH -- --out DIR [--all-cameras] [--multilayer])")
-    parser.add_argument("--images", help="colmap: the image folder (default: SRC/../images)")
+    parser.add_argument("--images", help="colmap: the image folder (default: SRC/../images or SRC/../../images, "
+                        "the first that exists: project/sparse or project/sparse/0 beside project/images)")
     parser.add_argument("--depth", help="colmap: folder of depth maps (NAME.geometric.bin or <stem>.exr/.png)")
     parser.add_argument("--depth-scale", type=positive_float, default=None,
                         help="scene units per stored depth unit (e.g. 0.001 for millimetre PNGs)")
     parser.add_argument("--intrinsics", type=float, nargs=4, metavar=("FX", "FY", "CX", "CY"),
                         help="tum: camera intrinsics in pixels (default the ROS set 525 525 319.5 239.5)")
-    parser.add_argument("--tolerance", type=positive_float, default=0.02,
-                        help="tum: max time difference (s) when associating colour, depth and poses")
+    parser.add_argument("--tolerance", type=positive_float, default=None,
+                        help="tum: max time difference (s) when associating colour, depth and poses (default 0.02)")
     parser.add_argument("--name", default=None, help="name of the sequence manifest (default: the format)")
+
+
+#: The options (and SRC) each format uses; any other given is refused, naming it (they were
+#: accepted and silently ignored: ``ibr import nerf ... --intrinsics 1 2 3 4``).
+_USES = {"nerf": ("SRC", "--out", "--depth-scale", "--name"),
+         "colmap": ("SRC", "--out", "--depth-scale", "--name", "--images", "--depth"),
+         "tum": ("SRC", "--out", "--depth-scale", "--name", "--intrinsics", "--tolerance"),
+         "blender": ("--script",),
+         "export-nerf": ("SRC", "--out")}
+
+
+def _check_options_apply(args) -> None:
+    given = {"SRC": bool(args.src), "--out": args.out is not None, "--script": args.script,
+             "--images": args.images is not None, "--depth": args.depth is not None,
+             "--depth-scale": args.depth_scale is not None, "--intrinsics": args.intrinsics is not None,
+             "--tolerance": args.tolerance is not None, "--name": args.name is not None}
+    stray = [o for o, g in given.items() if g and o not in _USES[args.format]]
+    if stray:
+        where = [f"{o} ({', '.join(f for f, uses in _USES.items() if o in uses)} only)" for o in stray]
+        raise ValueError(f"{', '.join(where)}: not used by `ibr import {args.format}`; remove "
+                         f"{'it' if len(stray) == 1 else 'them'}")
 
 
 def _export(args) -> int:
@@ -81,6 +111,7 @@ def run(args) -> int:
     from ibr.io.importers.common import ImportReport, check_sequence_name
     from ibr.io.outputs import OutputPlan
 
+    _check_options_apply(args)
     if args.format == "blender":
         if not args.script:
             raise ValueError("blender: renders are imported by the script run inside Blender; "
@@ -95,10 +126,10 @@ def run(args) -> int:
         raise ValueError("--out: the folder for the view files is required")
     report = ImportReport()
     options = {"depth_scale": args.depth_scale}
-    if args.format == "colmap":
-        options.update(images=args.images, depth=args.depth)
+    if args.format == "colmap":  # messages name the options as the user wrote them
+        options.update(images=args.images, depth=args.depth, labels={"images": "--images", "depth": "--depth"})
     if args.format == "tum":
-        options.update(intrinsics=args.intrinsics, tolerance=args.tolerance)
+        options.update(intrinsics=args.intrinsics, tolerance=0.02 if args.tolerance is None else args.tolerance)
     frames = read_frames(args.format, args.src[0], report=report, **options)  # every entry checked first
     with OutputPlan("ibr import", log=info) as plan:
         plan.add_input("SRC", args.src[0])
@@ -107,7 +138,7 @@ def run(args) -> int:
             plan.add_input("SRC", f.depth)
         if len(frames) > 1:
             check_sequence_name(args.name or args.format, [f.name for f in frames])  # before any work
-        folder = plan.add_folder("--out", args.out, _written_names(frames, args.name or args.format))
+        folder = plan.add_folder("--out", args.out, _written_names(frames, args.name or args.format, args.out))
         plan.check()
         write_views(frames, plan.stage(folder), report, sequence_name=args.name or args.format,
                     progress=lambda k, n: info(f"import: {k}/{n} frames") if k == n or k % 10 == 0 else None)

@@ -32,6 +32,7 @@ N_STEREO = 3
 def _make_batch(folder: Path, views) -> Path:
     """Views and a batch file in ``folder``: 3 stereo jobs, 1 interpolate job (folder output), 1 failing job."""
     (folder / "views").mkdir(parents=True)
+    (folder / "out").mkdir()  # an output's folder must exist, as for the command run alone
     for v in views:
         save_view(v, folder / "views" / f"{v.name}.json")
     jobs = [{"id": f"stereo-{i}", "argv": ["stereo", f"views/{views[i].name}.json", "--mode", "sbs",
@@ -282,7 +283,6 @@ def test_a_failed_commit_replaces_nothing(tmp_path, views):
     every file can be, and the staging folder is removed."""
     path = _make_batch(tmp_path, views)
     out = tmp_path / "out"
-    out.mkdir()
     (out / "stereo_0.png").write_bytes(b"old")
     (out / "holes.png").mkdir()  # an existing folder where a file output goes
     doc = json.loads(path.read_text())
@@ -345,3 +345,68 @@ def test_a_failed_job_leaves_no_new_folders_and_cwd_must_exist(tmp_path, views):
     with pytest.raises(ValueError, match="'cwd' .*no/such/folder is not an existing folder"):
         load_jobs(path)
     assert not (tmp_path / "no").exists()
+
+
+def test_failures_name_the_paths_as_the_job_wrote_them_and_missing_folders_are_refused(tmp_path, views, capsys):
+    """A job's error named the hidden staging path (``-o: /…/out/.ibr-batch-warp-…/m1.txt has the
+    extension '.txt'``), and ``mesh … --obj nodir/x7.obj`` reported done and created nodir/,
+    which ``ibr mesh`` run alone refuses. Now the messages are the command's own, with the job's
+    paths, and a missing output folder is refused with the direct command's message (nothing is
+    created for the staging: the staged path keeps the missing folder)."""
+    for v in views[:2]:
+        save_view(v, tmp_path / f"{v.name}.json")
+    (tmp_path / "out").mkdir()
+    a, b = (f"{v.name}.json" for v in views[:2])
+    jobs = [{"id": "txt", "argv": ["warp", a, "--to", b, "-o", "out/m1.txt"]},
+            {"id": "json", "argv": ["mesh", a, "--obj", "jobs.json"]},
+            {"id": "nodir", "argv": ["mesh", a, "--obj", "nodir/x7.obj"]},
+            {"id": "export", "argv": ["import", "export-nerf", a, "--out", "nodir2/t.json"]},
+            {"id": "deep", "argv": ["warp", a, "--to", b, "-o", "out/no/such/w.png"]},
+            {"id": "fine", "argv": ["warp", a, "--to", b, "-o", "out/w.png"]}]
+    path = tmp_path / "jobs.json"
+    path.write_text(json.dumps({"format": "ibr-batch", "version": 1, "jobs": jobs}))
+    before = path.read_bytes()
+    report = run_batch(load_jobs(path), records=tmp_path / ".ibr-batch", workers=2)
+    error = {r["id"]: r["error"] for r in report.results}
+    assert error["txt"] == ("ibr warp: error: -o: out/m1.txt has the extension '.txt'; "
+                            "expected one of .png, .jpg, .jpeg, .tif, .tiff, .exr, .pfm")
+    assert error["json"] == "ibr mesh: error: --obj: jobs.json has the extension '.json'; expected one of .obj"
+    for job, option, out in (("nodir", "--obj", "nodir/x7.obj"), ("export", "--out", "nodir2/t.json"),
+                             ("deep", "-o", "out/no/such/w.png")):
+        assert cli.main([*next(j["argv"] for j in jobs if j["id"] == job)[:-2], option, str(tmp_path / out)]) == 1
+        alone = capsys.readouterr().err.strip().replace(str(tmp_path) + os.sep, "")
+        assert error[job] == alone, (error[job], alone)  # the same message as the command run alone
+        assert "does not exist" in alone and STAGE_PREFIX not in error[job]
+    assert error["fine"] == "" and (tmp_path / "out" / "w.png").is_file()
+    assert not (tmp_path / "nodir").exists() and not (tmp_path / "nodir2").exists()
+    assert not (tmp_path / "out" / "no").exists() and path.read_bytes() == before
+    assert not [p for p in tmp_path.rglob(f"{STAGE_PREFIX}*")]
+
+
+def test_batch_sees_every_form_of_an_output_option(tmp_path, views, capsys):
+    """A misspelt ``--objj out/x.obj`` was reported as "no output found" instead of the command's
+    own usage error; the attached ``-oout/k8.png`` was not seen as an output. ``ibr batch`` parses
+    each job with ibr's own parser: usage errors are refused up front with the command's message,
+    and outputs are found as the command reads them (attached, ``=`` and abbreviated forms)."""
+    save_view(views[0], tmp_path / "a.json")
+    save_view(views[1], tmp_path / "b.json")
+    (tmp_path / "out").mkdir()
+    path = tmp_path / "jobs.json"
+    path.write_text(json.dumps([["mesh", "a.json", "--objj", "out/x.obj"]]))
+    assert cli.main(["batch", str(path), "--workers", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "jobs[0]: ibr mesh: " in err and "unrecognized arguments: --objj out/x.obj" in err
+    assert "no output found" not in err
+    path.write_text(json.dumps([["interpolate", "a.json", "b.json"]]))  # its default --out is not on the line
+    with pytest.raises(ValueError, match="jobs\\[0\\]: no output found"):
+        load_jobs(path, parser=cli.build_parser())
+    path.write_text(json.dumps([["warp", "a.json", "--to", "b.json", "-oout/k8.png"],
+                                ["warp", "a.json", "--to", "b.json", "--output=out/k9.png"],
+                                ["warp", "b.json", "--to", "a.json", "-o", "out/k10.png", "--depth-o", "out/k10.exr"]]))
+    assert [j.outputs for j in load_jobs(path)][0] == ("out/k8.png",)  # the library sees -oVALUE too
+    assert cli.main(["batch", str(path), "--workers", "1"]) == 0
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["k10.exr", "k10.png", "k8.png", "k9.png"]
+    record = json.loads(next((tmp_path / ".ibr-batch").glob("warp-*.json")).read_text())
+    assert record["outputs"]
+    records = [json.loads(p.read_text()) for p in (tmp_path / ".ibr-batch").glob("warp-*.json")]
+    assert sorted(o for r in records for o in r["outputs"]) == ["out/k10.exr", "out/k10.png", "out/k8.png", "out/k9.png"]

@@ -424,3 +424,124 @@ def test_other_tools_fx_key_is_ignored_and_a_list_encoding_named(tmp_path):
     (tmp_path / "w.json").write_text(json.dumps(doc))
     with pytest.raises(ValueError, match="encoding"):
         load_view(tmp_path / "w.json")
+
+
+def test_tum_missing_image_names_its_list_file(tmp_path):
+    """A depth image deleted from a TUM folder was reported as "listed in tum" (the folder), not
+    the list file that names it."""
+    _tum(tmp_path / "tum")
+    (tmp_path / "tum" / "depth_1.png").unlink()
+    with pytest.raises(FileNotFoundError, match=re.escape(f"depth_1.png (listed in {tmp_path / 'tum' / 'depth.txt'}) is missing")):
+        read_frames("tum", tmp_path / "tum", intrinsics=(50.0, 50.0, 31.5, 23.5))
+    _tum(tmp_path / "tum2")
+    (tmp_path / "tum2" / "rgb_1.png").unlink()
+    with pytest.raises(FileNotFoundError, match=re.escape(f"(listed in {tmp_path / 'tum2' / 'rgb.txt'})")):
+        read_frames("tum", tmp_path / "tum2", intrinsics=(50.0, 50.0, 31.5, 23.5))
+
+
+def test_an_empty_frames_list_is_called_empty(tmp_path):
+    """``"frames": []`` was reported as "has no 'frames' list"."""
+    (tmp_path / "t.json").write_text(json.dumps({"fl_x": 10, "w": 4, "h": 4, "frames": []}))
+    with pytest.raises(ValueError, match="'frames' is an empty list"):
+        read_frames("nerf", tmp_path / "t.json")
+    (tmp_path / "t.json").write_text(json.dumps({"fl_x": 10, "w": 4, "h": 4}))
+    with pytest.raises(ValueError, match="has no 'frames' list"):
+        read_frames("nerf", tmp_path / "t.json")
+
+
+def _colmap_sparse0(root: Path) -> Path:
+    """The pair as COLMAP writes a project: root/images, root/depth and root/sparse/0."""
+    (root / "depth").mkdir(parents=True)
+    _colmap_model(root)
+    (root / "sparse" / "0").mkdir()
+    for f in ("cameras.txt", "images.txt"):
+        (root / "sparse" / f).rename(root / "sparse" / "0" / f)
+    return root / "sparse" / "0"
+
+
+def test_colmap_depth_folder_problems_name_depth_and_each_skipped_image(tmp_path, capsys):
+    """A wrong --depth folder said only "no usable image in images.txt" (no reason, no --depth);
+    one depth map missing printed "1/1 frames" without saying that one of two images was left out."""
+    model = _colmap_sparse0(tmp_path / "cm")
+    images = str(tmp_path / "cm" / "images")
+    base = ["import", "colmap", str(model), "--images", images]
+    assert cli.main(base + ["--depth", str(tmp_path / "nodir"), "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert f"--depth: {tmp_path / 'nodir'} does not exist" in err and len(err.strip().splitlines()) == 1
+    (tmp_path / "empty").mkdir()
+    assert cli.main(base + ["--depth", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert f"none of the 2 image(s) of {model / 'images.txt'} has a depth map in --depth {tmp_path / 'empty'}" in err
+    assert "camA_0001.png.geometric.bin" in err and "camA_0001{.exr," in err
+    assert not (tmp_path / "o").exists()
+    (tmp_path / "d1").mkdir()
+    shutil.copy(tmp_path / "cm" / "depth" / "camA_0001.exr", tmp_path / "d1")
+    assert cli.main(base + ["--depth", str(tmp_path / "d1"), "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert f"1 of 2 images skipped: camB_0001.png: no depth map in --depth {tmp_path / 'd1'}" in err
+    assert sorted(p.name for p in (tmp_path / "o").glob("*.json")) == ["camA_0001.json"]
+    with pytest.raises(FileNotFoundError, match="depth: .* does not exist"):  # the library names its argument
+        read_frames("colmap", model, images=images, depth=tmp_path / "nodir")
+
+
+def test_colmap_default_image_folder_finds_the_project_layout(tmp_path, capsys):
+    """The default --images was SRC/../images: sparse/images for COLMAP's project/sparse/0 layout.
+    It now tries SRC/../images, then SRC/../../images, and says which it tried when none exists."""
+    model = _colmap_sparse0(tmp_path / "cm")
+    assert [f.color for f in read_frames("colmap", model)] == [tmp_path / "cm" / "images" / f"{n}.png" for n in NAMES]
+    assert cli.main(["import", "colmap", str(model), "--out", str(tmp_path / "o")]) == 0
+    capsys.readouterr()
+    _colmap_model(tmp_path / "flat")  # project/sparse beside project/images
+    assert read_frames("colmap", tmp_path / "flat" / "sparse")[0].color.parent == tmp_path / "flat" / "images"
+    shutil.rmtree(tmp_path / "cm" / "images")
+    assert cli.main(["import", "colmap", str(model), "--out", str(tmp_path / "o2")]) == 1
+    err = capsys.readouterr().err
+    assert (f"no image folder beside {model} (tried {tmp_path / 'cm' / 'sparse' / 'images'}, "
+            f"{tmp_path / 'cm' / 'images'}); pass --images DIR") in err
+    assert cli.main(["import", "colmap", str(model), "--images", str(tmp_path / "nope"), "--out", str(tmp_path / "o2")]) == 1
+    assert f"--images: {tmp_path / 'nope'} does not exist" in capsys.readouterr().err
+    assert not (tmp_path / "o2").exists()
+
+
+def test_options_of_another_format_are_refused_by_name(tmp_path, capsys):
+    """``ibr import nerf ... --intrinsics 1 2 3 4 --images foo`` was accepted and the options
+    silently ignored; an option the chosen format does not use is refused, naming it."""
+    src = str(RGB / "transforms.json")
+    for argv, named in ((["nerf", src, "--intrinsics", "1", "2", "3", "4", "--images", "foo"],
+                         "--images (colmap only), --intrinsics (tum only): not used by `ibr import nerf`"),
+                        (["nerf", src, "--tolerance", "0.1"], "--tolerance (tum only)"),
+                        (["tum", str(tmp_path), "--depth", "d"], "--depth (colmap only)"),
+                        (["export-nerf", str(RGB / "camA_0001.json"), "--depth-scale", "2"], "--depth-scale ("),
+                        (["blender", "--script", "--out", "x"], "--out (")):
+        out = tmp_path / "out"
+        assert cli.main(["import", *argv] + ([] if "--out" in argv else ["--out", str(out)])) == 1, argv
+        assert named in capsys.readouterr().err
+        assert not out.exists()
+    _tum(tmp_path / "tum")  # the options a format uses still work
+    assert cli.main(["import", "tum", str(tmp_path / "tum"), "--tolerance", "0.02", "--intrinsics", "50", "50",
+                     "31.5", "23.5", "--out", str(tmp_path / "t")]) == 0
+
+
+def test_a_one_frame_import_does_not_leave_an_earlier_manifest(tmp_path, capsys):
+    """A one-frame transforms.json imported into the folder of an earlier two-frame import left
+    the old nerf.json listing both views (the old camA beside the new camB): the import owns its
+    manifest name, so the stale manifest is removed with the commit (staged, nothing on failure).
+    A user's own JSON of that name that is no manifest is left alone."""
+    t = json.loads((RGB / "transforms.json").read_text())
+    for f in RGB.glob("cam*_*.*"):
+        shutil.copy(f, tmp_path)
+    t1 = dict(t, frames=t["frames"][:1])
+    (tmp_path / "one.json").write_text(json.dumps(t1))
+    out = tmp_path / "out"
+    assert cli.main(["import", "nerf", str(RGB / "transforms.json"), "--out", str(out)]) == 0
+    assert len(json.loads((out / "nerf.json").read_text())["views"]) == 2
+    assert cli.main(["import", "nerf", str(tmp_path / "one.json"), "--out", str(out)]) == 0
+    assert not (out / "nerf.json").exists()
+    assert "removed 1 file(s) of an earlier run" in capsys.readouterr().err
+    (out / "nerf.json").write_text('{"mine": 1}\n')  # not a manifest: the user's file
+    assert cli.main(["import", "nerf", str(tmp_path / "one.json"), "--out", str(out)]) == 0
+    assert (out / "nerf.json").read_text() == '{"mine": 1}\n'
+    # the library writes into the folder directly: the same
+    import_views("nerf", RGB / "transforms.json", tmp_path / "lib")
+    import_views("nerf", tmp_path / "one.json", tmp_path / "lib")
+    assert not (tmp_path / "lib" / "nerf.json").exists()

@@ -12,7 +12,9 @@ A batch file lists jobs; a job is any ``ibr`` command line::
 ``ibr`` optional) is the command line; ``id`` (default: a hash of the command line) names the
 job's record; ``outputs`` lists the command-line values that are outputs (default: the values of
 ``-o/--out/--output/--video/--contact-sheet/--obj/--ply/--viz/--depth-out/--holes-out/--report/``
-``--coverage/--cube/--site``);
+``--coverage/--cube/--site``, in any form the command reads: ``-o x``, ``--out=x``, ``-ox``; with the
+``ibr`` parser (``load_jobs(path, parser=...)``, as ``ibr batch`` does) abbreviations too, and a
+command line the command would refuse as a usage error is refused up front with its message);
 ``inputs`` adds input files the command line does not name; ``cwd`` (default: the batch file's
 folder) is where relative paths start. Jobs are independent: no job may read another's output.
 
@@ -24,7 +26,10 @@ Running a job (:func:`run_job`, on any worker) is idempotent and leaves no parti
 2. if the job's record exists with the same command line, the same input checksums and every
    output file present with its recorded checksum, nothing runs (``skipped``);
 3. otherwise every output value on the command line is redirected into a hidden staging folder
-   ``.ibr-batch-<id>-<token>/`` beside the output, the command runs in a child process
+   ``.ibr-batch-<id>-<token>/`` beside the output (or, when the output's folder does not exist,
+   beside its nearest existing ancestor, keeping the missing folders in the staged path: nothing
+   is created, and the command refuses a missing output folder as it does run alone), the
+   command runs in a child process
    (``python -c`` running ``cli.main``; the child exits when its parent dies), and only when it
    succeeds are the staged files renamed into place (each rename atomic; files already in an output
    folder that the command did not write are left alone); the record, written
@@ -32,7 +37,8 @@ Running a job (:func:`run_job`, on any worker) is idempotent and leaves no parti
    staging folder, which the next attempt of the job removes before it starts. A job whose
    output (or a file of its output folder) is one of its inputs, after resolving links, fails
    before anything is renamed: the command itself cannot see that while it writes into the
-   staging folder.
+   staging folder. A failing command's message names the job's own paths (``-o: out/m1.txt``),
+   never the staged ones.
 
 Records live in one folder (default ``.ibr-batch/`` beside the batch file): ``<id>.json`` with
 the command line, input and output checksums, the run and attempt that committed it, and
@@ -41,6 +47,7 @@ the command line, input and output checksums, the run and attempt that committed
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import hashlib
 import json
@@ -131,12 +138,19 @@ class Job:
                 "inputs": list(self.inputs)}
 
 
+#: Short output options, which argparse also takes attached to their value (``-oout/a.png``).
+_SHORT_OUTPUTS = tuple(o for o in OUTPUT_OPTIONS if len(o) == 2 and o[1] != "-")
+
+
 def _option_value_pairs(argv):
-    """(index, option, value) for ``--opt value`` and ``--opt=value`` forms."""
+    """(index, option, value) for ``--opt value``, ``--opt=value`` and, for the short output
+    options, the attached ``-oVALUE`` forms."""
     for i, a in enumerate(argv):
         if a.startswith("-") and "=" in a:
             opt, _, val = a.partition("=")
             yield i, opt, val
+        elif a[:2] in _SHORT_OUTPUTS and len(a) > 2:  # -oout/k8.png (was not seen as an output)
+            yield i, a[:2], a[2:]
         elif a.startswith("-") and i + 1 < len(argv):
             yield i + 1, a, argv[i + 1]
 
@@ -145,7 +159,50 @@ def _infer_outputs(argv) -> tuple:
     return tuple(val for _, opt, val in _option_value_pairs(argv) if opt in OUTPUT_OPTIONS)
 
 
-def _job_from(entry, index: int, base: Path) -> Job:
+def _on_command_line(argv, value: str) -> bool:
+    """Whether ``value`` is one of ``argv``'s tokens or the value of an option (``--x=value``,
+    ``-ovalue``): where the staging can redirect it."""
+    return value in argv or any(val == value for _, _, val in _option_value_pairs(argv)) or any(
+        a.startswith("-") and not a.startswith("--") and len(a) > 2 and a[2:] == value for a in argv)
+
+
+def _parse(parser, argv, where: str):
+    """``argv`` parsed by ``parser`` (the ``ibr`` command-line parser): a command line the command
+    would refuse as a usage error is refused here with the command's own message (a misspelt
+    ``--objj out/x.obj`` was reported as "no output found"). None for a ``--help`` line."""
+    import io
+
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            return parser.parse_args(list(argv))
+    except SystemExit as exc:
+        if not exc.code:
+            return None
+        lines = [line for line in err.getvalue().splitlines() if line.strip()]
+        message = re.sub(r"^[^:]*: error: ", "", lines[-1]) if lines else "the command line does not parse"
+        raise ValueError(f"{where}: ibr {argv[0]}: {message}") from None
+
+
+def _parsed_outputs(parser, args, argv) -> tuple:
+    """The values of ``argv``'s output options (:data:`OUTPUT_OPTIONS`) as ``parser`` read them:
+    abbreviations (``--ob`` for ``--obj``), ``--opt=value`` and ``-ovalue`` included."""
+    sub = next((a.choices.get(argv[0]) for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)
+    if sub is None or args is None:
+        return _infer_outputs(argv)
+    values = []
+    for action in sub._actions:
+        if not set(action.option_strings) & set(OUTPUT_OPTIONS):
+            continue
+        value = getattr(args, action.dest, None)
+        if value is None or value is action.default or isinstance(value, bool):
+            continue
+        values += [v for v in (value if isinstance(value, (list, tuple)) else [value]) if isinstance(v, str)]
+    # a default output (interpolate's "out") is not on the command line: it cannot be redirected
+    return tuple(dict.fromkeys(v for v in values if _on_command_line(argv, v)))
+
+
+def _job_from(entry, index: int, base: Path, parser=None) -> Job:
     where = f"jobs[{index}]"
     if isinstance(entry, (str, list)):
         entry = {"command": entry} if isinstance(entry, str) else {"argv": entry}
@@ -172,9 +229,10 @@ def _job_from(entry, index: int, base: Path) -> Job:
         raise ValueError(f"{where}: expected an ibr command line (e.g. 'stereo A.json -o A.png'), got {argv!r}")
     if argv[0] == "batch":
         raise ValueError(f"{where}: a batch job cannot run 'ibr batch'")
+    args = _parse(parser, argv, where) if parser is not None else None
     outputs = entry.get("outputs")
     if outputs is None:
-        outputs = _infer_outputs(argv)
+        outputs = _parsed_outputs(parser, args, argv) if parser is not None else _infer_outputs(argv)
     elif not isinstance(outputs, list) or not all(isinstance(o, str) and o for o in outputs):
         raise ValueError(f"{where}: 'outputs' must be a list of paths, got {outputs!r}")
     outputs = tuple(outputs)
@@ -182,7 +240,7 @@ def _job_from(entry, index: int, base: Path) -> Job:
         raise ValueError(f"{where}: no output found in {shlex.join(argv)!r}; name it with -o/--out or list the "
                          "command-line values that are outputs in 'outputs'")
     for o in outputs:
-        if o not in argv and not any(val == o for _, _, val in _option_value_pairs(argv)):
+        if not _on_command_line(argv, o):
             raise ValueError(f"{where}: output {o!r} does not appear on the command line {shlex.join(argv)!r}")
     inputs = entry.get("inputs", [])
     if not isinstance(inputs, list) or not all(isinstance(i, str) and i for i in inputs):
@@ -202,8 +260,13 @@ def _job_from(entry, index: int, base: Path) -> Job:
     return Job(job_id, tuple(argv), str(cwd), outputs, tuple(inputs))
 
 
-def load_jobs(path) -> list[Job]:
+def load_jobs(path, *, parser=None) -> list[Job]:
     """Read a batch file (module docstring) into jobs; relative paths start at its folder.
+
+    ``parser``: the ``ibr`` command-line parser (``cli.build_parser()``, as ``ibr batch`` passes
+    it): every job's command line is parsed first, a usage error refused with the command's own
+    message, and the outputs are found as the command reads its options (abbreviated ones too).
+    Without it, outputs are the values of :data:`OUTPUT_OPTIONS` spelt out.
 
     Raises
     ------
@@ -231,7 +294,7 @@ def load_jobs(path) -> list[Job]:
     if not isinstance(entries, list) or not entries:
         raise ValueError(f"jobs: {path}: expected a non-empty list of jobs (or an object with 'jobs'), got {entries!r}")
     base = path.resolve().parent
-    jobs = [_job_from(e, i, base) for i, e in enumerate(entries)]
+    jobs = [_job_from(e, i, base, parser) for i, e in enumerate(entries)]
     seen_ids, seen_out = {}, {}
     for i, j in enumerate(jobs):
         if j.id in seen_ids:
@@ -360,8 +423,20 @@ def _append_log(records: Path, line: dict) -> None:
 
 
 # --------------------------------------------------------------------------- staging
-def _stage_argv(job: Job, token: str, created: list | None = None) -> tuple[list[str], list[Path], dict[Path, Path]]:
-    """The command line with every output redirected into a staging folder beside it.
+def _stage_root(final: Path) -> Path:
+    """The folder that receives ``final``'s staging folder: its parent, or when that does not
+    exist (or is a file) the nearest existing folder above it. Nothing is created: the staged
+    path keeps the missing folders (``.ibr-batch-…/nodir/x.obj``), so the command meets them as
+    it would run alone and refuses a missing output folder with its own message."""
+    p = final.parent
+    while not p.is_dir() and p.parent != p:
+        p = p.parent
+    return p
+
+
+def _stage_argv(job: Job, token: str) -> tuple[list[str], list[Path], dict[Path, Path]]:
+    """The command line with every output redirected into a staging folder beside it (or beside
+    its nearest existing ancestor, :func:`_stage_root`).
 
     Returns (argv, staging folders, {staged output path: final output path}).
     """
@@ -372,13 +447,13 @@ def _stage_argv(job: Job, token: str, created: list | None = None) -> tuple[list
     try:
         for o in job.outputs:
             final = Path(os.path.normpath(cwd / o))
-            parent = final.parent
-            _make_parents(parent, created if created is not None else [])
-            stage = stages.setdefault(parent, parent / f"{STAGE_PREFIX}{job.id}-{token}")
+            root = _stage_root(final)
+            stage = stages.setdefault(root, root / f"{STAGE_PREFIX}{job.id}-{token}")
             stage.mkdir(exist_ok=True)
-            mapping[o] = str(stage / final.name)
-            staged_to_final[stage / final.name] = final
-    except OSError:  # (an output's folder is a file): its staging folders so far go again
+            staged = stage / final.relative_to(root)
+            mapping[o] = str(staged)
+            staged_to_final[staged] = final
+    except OSError:  # (a folder that cannot be written): its staging folders so far go again
         for stage in stages.values():
             shutil.rmtree(stage, ignore_errors=True)
         raise
@@ -387,35 +462,61 @@ def _stage_argv(job: Job, token: str, created: list | None = None) -> tuple[list
         if a.startswith("-") and "=" in a:
             opt, _, val = a.partition("=")
             argv.append(f"{opt}={mapping[val]}" if val in mapping else a)
+        elif a not in mapping and a.startswith("-") and not a.startswith("--") and a[2:] in mapping:
+            argv.append(a[:2] + mapping[a[2:]])  # -oout/k8.png
         else:
             argv.append(mapping.get(a, a))
     return argv, list(stages.values()), staged_to_final
 
 
-def _make_parents(folder: Path, created: list) -> None:
-    """``folder`` and its missing parents; the ones made go to ``created`` (deepest first)."""
-    missing = []
-    p = folder
-    while not p.exists():
-        missing.append(p)
-        p = p.parent
-    folder.mkdir(parents=True, exist_ok=True)
-    created.extend(missing)
+def _user_paths(job: Job, stages: list[Path], staged_to_final: dict[Path, Path]):
+    """(text, replacement) pairs, longest first, that turn the staged and absolute paths a command
+    printed back into the paths as the job wrote them (``-o: out/m1.txt …``, not the hidden
+    ``/…/out/.ibr-batch-<id>-<token>/m1.txt``)."""
+    cwd = Path(job.cwd)
+    user = {os.path.normpath(cwd / o): o for o in job.outputs}
+    pairs: dict[str, str] = {}
+    for staged, final in staged_to_final.items():
+        o = user.get(str(final), str(final))
+        for form in {str(staged), os.path.realpath(staged)}:
+            pairs[form] = o
+        for form in {str(final), os.path.realpath(final)}:
+            pairs.setdefault(form, o)
+    absolute = any(os.path.isabs(o) for o in job.outputs)
+    for stage in stages:
+        root = stage.parent
+        shown = str(root) if absolute else os.path.relpath(root, cwd)
+        for form in {str(stage), os.path.realpath(stage)}:
+            pairs[form + os.sep] = "" if shown == "." else shown + os.sep
+            pairs[form] = shown
+    return sorted(pairs.items(), key=lambda kv: -len(kv[0]))
 
 
-def _remove_created_folders(created: list) -> None:
-    """Remove the (still empty) output folders a job's staging created, deepest first."""
-    for folder in sorted(created, key=lambda p: len(p.parts), reverse=True):  # deepest first, all outputs
-        with contextlib.suppress(OSError):
-            folder.rmdir()
+def _as_user_wrote(text: str, pairs) -> str:
+    for old, new in pairs:
+        text = text.replace(old, new)
+    return text
 
 
 def _remove_stale_stages(job: Job) -> int:
-    """Remove staging folders of earlier, interrupted attempts of this job; return how many."""
+    """Remove staging folders of earlier, interrupted attempts of this job; return how many. They
+    are beside each output or above it (:func:`_stage_root`): every existing folder from the
+    output's parent up to the job's folder (or, outside it, up to the first existing one)."""
     cwd = Path(job.cwd)
     n = 0
     prefix = f"{STAGE_PREFIX}{job.id}-"
-    for parent in {Path(os.path.normpath(cwd / o)).parent for o in job.outputs}:
+    folders = set()
+    for o in job.outputs:
+        p = Path(os.path.normpath(cwd / o)).parent
+        while True:
+            if p.is_dir():
+                folders.add(p)
+                if p == cwd or cwd not in p.parents:
+                    break
+            if p.parent == p:
+                break
+            p = p.parent
+    for parent in folders:
         with contextlib.suppress(OSError):
             for entry in os.scandir(parent):
                 if entry.name.startswith(prefix) and entry.is_dir(follow_symlinks=False):
@@ -479,7 +580,6 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
         job = Job(job["id"], tuple(job["argv"]), job["cwd"], tuple(job["outputs"]), tuple(job.get("inputs", ())))
     records = Path(records)
     start = time.perf_counter()
-    created: list[Path] = []  # output folders made for this job's staging (removed if it fails)
     result = {"id": job.id, "argv": list(job.argv), "status": "failed", "seconds": 0.0,
               "worker": f"{socket.gethostname()}:{os.getpid()}", "returncode": None, "error": "",
               "outputs": [], "interrupted_attempts": 0, "recovered": False}
@@ -497,7 +597,7 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
             result["outputs"] = sorted(record["outputs"])
             return result
         token = uuid.uuid4().hex[:12]
-        argv, stages, staged_to_final = _stage_argv(job, token, created)
+        argv, stages, staged_to_final = _stage_argv(job, token)
         env = dict(os.environ)
         # the command checks the final paths too (its own inputs, e.g. the images a transforms.json
         # names, are known only to it): run alone it refuses what it must not write over
@@ -516,7 +616,8 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
         if proc.returncode != 0:
             for s in stages:
                 shutil.rmtree(s, ignore_errors=True)
-            result["error"] = _tail(proc.stderr) or f"exit code {proc.returncode}"
+            result["error"] = _as_user_wrote(_tail(proc.stderr), _user_paths(job, stages, staged_to_final)) \
+                or f"exit code {proc.returncode}"
             return result
         staged = [p for s in stages for p in s.rglob("*") if p.is_file()]
         if not staged:
@@ -553,5 +654,3 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
         return result
     finally:
         result["seconds"] = round(time.perf_counter() - start, 4)
-        if result["status"] == "failed":  # folders made only to hold its outputs go again
-            _remove_created_folders(created)

@@ -28,13 +28,17 @@ def blender_script_path() -> Path:
 
 
 def read_frames(fmt: str, src, *, images=None, depth=None, depth_scale: float | None = None,
-                intrinsics=None, tolerance: float = 0.02, report: ImportReport | None = None) -> list[Frame]:
+                intrinsics=None, tolerance: float = 0.02, report: ImportReport | None = None,
+                labels: dict | None = None) -> list[Frame]:
     """Frames of ``src`` in format ``fmt`` (one of :data:`FORMATS`), nothing written.
 
-    ``images``: COLMAP's image folder (default: ``src``'s parent's ``images``); ``depth``: COLMAP
-    depth folder; ``depth_scale``: scene units per stored depth unit (every format; for nerf it
-    replaces the file's own factor, for tum the benchmark's 1/5000 m); ``intrinsics``: TUM
-    ``(fx, fy, cx, cy)``; ``tolerance``: TUM time association in seconds.
+    ``images``: COLMAP's image folder (default: ``src/../images`` or ``src/../../images``, the
+    first that exists: ``project/sparse`` or ``project/sparse/0`` beside ``project/images``);
+    ``depth``: COLMAP depth folder (an image without a depth map there is skipped and reported);
+    ``depth_scale``: scene units per stored depth unit (every format; for nerf it replaces the
+    file's own factor, for tum the benchmark's 1/5000 m); ``intrinsics``: TUM ``(fx, fy, cx,
+    cy)``; ``tolerance``: TUM time association in seconds; ``labels``: how messages name
+    ``images`` / ``depth`` (``ibr import`` passes its options, ``--images`` / ``--depth``).
     """
     src = Path(src)
     if depth_scale is not None:
@@ -48,8 +52,7 @@ def read_frames(fmt: str, src, *, images=None, depth=None, depth_scale: float | 
     if fmt == "colmap":
         from .colmap import read_colmap
 
-        image_dir = Path(images) if images is not None else src.parent / "images"
-        return read_colmap(src, image_dir, depth_dir=depth, depth_scale=depth_scale, report=report)
+        return read_colmap(src, images, depth_dir=depth, depth_scale=depth_scale, report=report, labels=labels)
     if fmt == "tum":
         from .tum import TUM_INTRINSICS, read_tum
 

@@ -14,6 +14,7 @@ Depth: ``depth_dir`` holding, per image ``NAME``, COLMAP's dense ``NAME.geometri
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -22,8 +23,10 @@ from ...base.camera import Camera
 from .common import Frame, ImportReport
 from .conventions import pose_from_world_to_camera, rotation_from_quaternion
 
-__all__ = ["MODELS", "read_colmap", "read_colmap_depth"]
+__all__ = ["MODELS", "image_dir_candidates", "read_colmap", "read_colmap_depth"]
 
+#: Depth image extensions looked for beside ``<stem>`` in the depth folder.
+DEPTH_EXTS = (".exr", ".png", ".tif", ".tiff", ".pfm")
 #: Supported camera models and their parameter counts.
 MODELS = {"SIMPLE_PINHOLE": 3, "PINHOLE": 4, "OPENCV": 8}
 
@@ -107,12 +110,56 @@ def read_colmap_depth(path) -> np.ndarray:
     return z
 
 
-def read_colmap(model_dir, image_dir, *, depth_dir=None, depth_scale: float | None = None,
-                report: ImportReport | None = None) -> list[Frame]:
-    """Frames of a COLMAP text model (see the module docstring), in ``images.txt`` order."""
-    model_dir, image_dir = Path(model_dir), Path(image_dir)
+def _named(labels, key: str, value=None) -> str:
+    """How messages name the argument ``key`` (``images`` or ``depth``): as the caller's user wrote
+    it (``labels``, e.g. ``{"depth": "--depth"}`` from ``ibr import``), else the library's words."""
+    option = (labels or {}).get(key)
+    if option:
+        return option if value is None else f"{option} {value}"
+    return key if value is None else f"the {key} folder {value}"
+
+
+def image_dir_candidates(model_dir) -> list[Path]:
+    """Where COLMAP projects keep the images of a model folder ``SRC``: ``SRC/../images``
+    (``project/sparse`` + ``project/images``) and ``SRC/../../images`` (``project/sparse/0``, as
+    COLMAP's mapper writes it), in that order."""
+    model_dir = str(model_dir)
+    out: list[Path] = []
+    for up in ("..", "../.."):
+        p = Path(os.path.normpath(os.path.join(model_dir, up, "images")))
+        if p not in out:
+            out.append(p)
+    return out
+
+
+def _depth_candidates(name: str) -> str:
+    stem = Path(name).stem
+    return f"{name}.geometric.bin, {name}.photometric.bin or {stem}{{{','.join(DEPTH_EXTS)}}}"
+
+
+def read_colmap(model_dir, image_dir=None, *, depth_dir=None, depth_scale: float | None = None,
+                report: ImportReport | None = None, labels: dict | None = None) -> list[Frame]:
+    """Frames of a COLMAP text model (see the module docstring), in ``images.txt`` order.
+
+    ``image_dir`` ``None``: the first existing folder of :func:`image_dir_candidates`. An image
+    without a depth map in ``depth_dir`` is skipped (``report.dropped``, with where it looked);
+    none with one is an error. ``labels`` names ``images`` / ``depth`` in messages as the caller's
+    user wrote them (``ibr import``: ``{"images": "--images", "depth": "--depth"}``)."""
+    model_dir = Path(model_dir)
+    for key, folder in (("images", image_dir), ("depth", depth_dir)):  # a wrong folder, up front
+        if folder is not None and not Path(folder).is_dir():
+            what = "is not a folder" if Path(folder).exists() else "does not exist"
+            raise FileNotFoundError(f"{_named(labels, key)}: {folder} {what} (expected the folder of "
+                                    f"{'the images images.txt names' if key == 'images' else 'depth maps'})")
     cams = read_cameras(model_dir / "cameras.txt")
-    frames = []
+    if image_dir is None:
+        tried = image_dir_candidates(model_dir)
+        image_dir = next((d for d in tried if d.is_dir()), None)
+        if image_dir is None:
+            raise FileNotFoundError(f"colmap: no image folder beside {model_dir} (tried {', '.join(map(str, tried))}); "
+                                    f"pass {_named(labels, 'images', 'DIR') if (labels or {}).get('images') else 'images=DIR'}")
+    image_dir = Path(image_dir)
+    frames, skipped = [], []
     lines = [(n, l.strip()) for n, l in _lines(model_dir / "images.txt") if not l.strip().startswith("#")]
     k = 0
     while k < len(lines):
@@ -156,8 +203,10 @@ def read_colmap(model_dir, image_dir, *, depth_dir=None, depth_scale: float | No
         if depth_dir is not None:
             depth = _depth_file(Path(depth_dir), name)
             if depth is None:
+                skipped.append(name)
                 if report is not None:
-                    report.dropped.append((name, f"no depth map for it in {depth_dir}"))
+                    report.dropped.append((name, f"no depth map in {_named(labels, 'depth', depth_dir)} "
+                                                 f"(looked for {_depth_candidates(name)})"))
                 continue
         undistort = None
         if dist is not None and np.any(dist != 0):
@@ -165,8 +214,14 @@ def read_colmap(model_dir, image_dir, *, depth_dir=None, depth_scale: float | No
             undistort = _undistorter(kk, dist)
         reader = read_colmap_depth if depth is not None and depth.suffix == ".bin" else None
         frames.append(Frame(Path(name).stem, color, cam, depth, scale, None, undistort, reader))
+    if report is not None:
+        report.listed, report.unit = len(frames) + len(skipped), "images"
+    if not frames and skipped:  # every image skipped: say why, for the first
+        raise FileNotFoundError(f"colmap: none of the {len(skipped)} image(s) of {model_dir / 'images.txt'} has a depth "
+                                f"map in {_named(labels, 'depth', depth_dir)} (for {skipped[0]} it looked for "
+                                f"{_depth_candidates(skipped[0])})")
     if not frames:
-        raise ValueError(f"colmap: no usable image in {model_dir / 'images.txt'}")
+        raise ValueError(f"colmap: {model_dir / 'images.txt'} lists no image")
     return frames
 
 
@@ -175,7 +230,7 @@ def _depth_file(folder: Path, name: str) -> Path | None:
         if cand.is_file():
             return cand
     stem = Path(name).stem
-    for ext in (".exr", ".png", ".tif", ".tiff", ".pfm"):
+    for ext in DEPTH_EXTS:
         if (folder / (stem + ext)).is_file():
             return folder / (stem + ext)
     return None

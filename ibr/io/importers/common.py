@@ -44,11 +44,19 @@ class ImportReport:
     dropped: list[tuple[str, str]] = field(default_factory=list)
     ignored_keys: list[str] = field(default_factory=list)
     sequence: Path | None = None
+    listed: int | None = None  # how many entries the source listed (default: written + dropped)
+    unit: str = "frames"       # what the source lists ("images" for COLMAP)
 
     def lines(self) -> list[str]:
         out = [f"{len(self.written)} view file(s) written"
                + (f", sequence {self.sequence.name}" if self.sequence else "")]
-        out += [f"dropped {name}: {why}" for name, why in self.dropped]
+        if self.dropped:  # how many of how many, and why each
+            total = self.listed if self.listed is not None else len(self.written) + len(self.dropped)
+            head = f"{len(self.dropped)} of {total} {self.unit} skipped"
+            if len(self.dropped) == 1:
+                out.append(f"{head}: {self.dropped[0][0]}: {self.dropped[0][1]}")
+            else:
+                out += [f"{head}:"] + [f"  {name}: {why}" for name, why in self.dropped]
         if self.ignored_keys:
             out.append("ignored keys (not used by ibr): " + ", ".join(sorted(set(self.ignored_keys))))
         return out
@@ -104,6 +112,15 @@ def _load_frame(f: Frame) -> View:
     return View(color, depth, f.camera, f.name)
 
 
+def is_sequence_manifest(path) -> bool:
+    """Whether ``path`` is an ``ibr-sequence`` manifest (as an earlier import wrote it)."""
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return False
+    return isinstance(doc, dict) and doc.get("format") == SEQUENCE_FORMAT
+
+
 def check_sequence_name(name, frame_names) -> None:
     """``name`` of an import's sequence manifest (``<name>.json`` in the output folder): a plain
     file name (``../../transforms`` wrote over the input), and no frame's name (``r_0`` replaced
@@ -121,7 +138,8 @@ def write_views(frames: list[Frame], folder: Path, report: ImportReport, *, sequ
                 progress=None) -> ImportReport:
     """Load every frame and write ``<name>.json`` (+ PNG colour, EXR depth) into ``folder``; with
     more than one frame and ``sequence_name``, also ``<sequence_name>.json``, a sequence manifest
-    in the frames' order."""
+    in the frames' order. With one frame, an earlier import's manifest of that name in ``folder``
+    is removed (it listed the earlier frames: a stale sequence beside the new view)."""
     folder = Path(folder)
     names = [f.name for f in frames]
     if len(set(names)) != len(names):
@@ -143,4 +161,7 @@ def write_views(frames: list[Frame], folder: Path, report: ImportReport, *, sequ
                "views": [p.name for p in report.written]}
         seq.write_text(json.dumps(doc, indent=2) + "\n")
         report.sequence = seq
+    elif sequence_name and is_sequence_manifest(folder / f"{sequence_name}.json") \
+            and f"{sequence_name}.json" not in {p.name for p in report.written}:
+        (folder / f"{sequence_name}.json").unlink()
     return report

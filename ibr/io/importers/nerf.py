@@ -108,8 +108,10 @@ def read_transforms(path, report: ImportReport | None = None, *, depth_scale: fl
     ``depth_unit_scale_factor`` / ``integer_depth_scale``."""
     path = Path(path)
     top = read_json(path, "transforms")
-    if not isinstance(top, dict) or not isinstance(top.get("frames"), list) or not top["frames"]:
+    if not isinstance(top, dict) or not isinstance(top.get("frames"), list):
         raise ValueError(f"transforms: {path} has no 'frames' list")
+    if not top["frames"]:  # (was reported as having no list at all)
+        raise ValueError(f"transforms: {path}: 'frames' is an empty list; no frame to import")
     check_foreign_keys(f"transforms {path.name}", top, _TOP_KEYS, report)
     model = top.get("camera_model", "OPENCV")
     if model not in ("OPENCV", "PINHOLE", "SIMPLE_PINHOLE"):

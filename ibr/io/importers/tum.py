@@ -96,9 +96,9 @@ def read_tum(folder, *, intrinsics=TUM_INTRINSICS, size=None, tolerance: float =
         if not np.isfinite(pose).all():
             raise ValueError(f"tum groundtruth.txt: the pose at t = {gt[gi][0]}: expected finite numbers")
         color, dpath = folder / name, folder / depth[di][1][0]
-        for p in (color, dpath):
+        for p, listed in ((color, "rgb.txt"), (dpath, "depth.txt")):  # the list file that names it
             if not p.is_file():
-                raise FileNotFoundError(f"tum: {p} (listed in {folder.name}) is missing")
+                raise FileNotFoundError(f"tum: {p} (listed in {folder / listed}) is missing")
         if size is None:  # the benchmark's 640 x 480, or whatever the images are
             from ..images import read_image
 
