@@ -36,6 +36,7 @@ def make_views(folder: Path, n: int = 8):
     from ibr.synth import camera_path, make_scene, render_path
 
     (folder / "views").mkdir(parents=True, exist_ok=True)
+    (folder / "out").mkdir(exist_ok=True)  # the jobs' output folder (a job, like the command, does not make it)
     views = render_path(make_scene("room"), camera_path("room", n, width=64, height=48), supersample=1, name="v")
     for v in views:
         save_view(v, folder / "views" / f"{v.name}.json")
