@@ -265,6 +265,7 @@ _add("--to wrapped camera", C, "ok", r"wrote", argv=("warp", "{d}/a.json", "--to
      extra={"camera_wrap": {}})
 _add("--to bare camera", C, "ok", r"wrote .*o.png", argv=("warp", "{d}/a.json", "--to", "{d}/cam.json", "-o", "{d}/o.png"))
 
+
 # ---- outputs: extensions, folders, inputs (README: a failure never touches an existing file)
 O = "outputs"
 _add("warp -o the source's colour image", O, "error", r"-o: .*a_color.png is the input VIEW 'color'",
@@ -349,6 +350,9 @@ _add("view --site is a file", O, "error", r"site: .* exists and is not a folder"
 _add("view --force without --serve", O, "error", r"--force: only with --site",
      argv=("view", "{d}/pano.png", "--force", "-o", "{d}/v.png"))
 _add("samples --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("samples", "--out", "{d}/notes.txt"))
+_add("view --site in a missing folder (was created with its parents)", O, "error",
+     r"--site: the folder .*nodir/deeper of .* does not exist", argv=("view", "{d}/pano.png", "--site",
+     "{d}/nodir/deeper/site"), extra={"absent": ("nodir",)})
 _add("bench --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("bench", "synth", "--out", "{d}/notes.txt"))
 
 # ---- command-line ranges (parse time: exit 2 before any file is touched)
@@ -498,6 +502,33 @@ _add("view without -o", C, "error", r"-o/--output: required unless --serve", arg
 _add("view -o .bmp", O, "error", r"-o: .*v.bmp has the extension '.bmp'", argv=("view", "{d}/pano.png", "-o", "{d}/v.bmp"))
 _add("view --tour -o .txt", O, "error", r"-o: .*t.txt has the extension '.txt'; expected one of .gif",
      argv=("view", "{d}/pano.png", "--tour", "2", "-o", "{d}/t.txt"))
+# options that had no effect where they were given (exit 0, silently ignored), library words
+_add("view -o with --site (the still was never written)", C, "error", r"-o: not used with --serve/--site",
+     argv=("view", "{d}/pano.png", "-o", "{d}/v.png", "--site", "{d}/site"), extra={"absent": ("site", "v.png")})
+_add("view --tiles for a still", C, "error", r"--tiles: only with --serve/--site", argv=("view", "{d}/pano.png",
+     "--tiles", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --face-size for a still", C, "error", r"--face-size: only with --serve/--site", argv=("view", "{d}/pano.png",
+     "--face-size", "8", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --fps for a still", C, "error", r"--fps: only with --tour and an animation -o", argv=("view", "{d}/pano.png",
+     "--fps", "5", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --tour --fps into a frames folder", C, "error", r"--fps: only with --tour and an animation -o",
+     argv=("view", "{d}/pano.png", "--tour", "2", "--fps", "5", "-o", "{d}/tour"), extra={"absent": ("tour",)})
+_add("view --head-box without --depth", C, "error", r"--head-box: only with --depth", argv=("view", "{d}/pano.png",
+     "--head-box", "1", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --stereo-out without --stereo", C, "error", r"--stereo-out: only with --stereo", argv=("view", "{d}/pano.png",
+     "--stereo-out", "sbs", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --port with --site only", C, "error", r"--port: only with --serve", argv=("view", "{d}/pano.png", "--site",
+     "{d}/site", "--port", "0"), extra={"absent": ("site",)})
+_add("view --yaw with --site only (the site stores no view)", C, "error", r"--yaw: only with --serve",
+     argv=("view", "{d}/pano.png", "--site", "{d}/site", "--yaw", "30"), extra={"absent": ("site",)})
+_add("view --width with --serve", C, "error", r"--width: not used with --serve/--site", argv=("view", "{d}/pano.png",
+     "--serve", "--width", "16"))
+_add("view --layout with --stereo (read as an equirect pair)", C, "error", r"--layout: a --stereo panorama is an equirect",
+     argv=("view", "{d}/pano.png", "--stereo", "sbs", "--layout", "dice", "-o", "{d}/v.png"))
+_add("view --fov 1e-6 (was the library's fx)", C, "error", r"--fov: expected at least .* degrees at --width 32",
+     argv=("view", "{d}/pano.png", "--fov", "1e-6", "--width", "32", "--height", "16", "-o", "{d}/v.png"))
+_add("view of no known layout names --layout (was layout=)", C, "error", r"or pass --layout\n",
+     argv=("view", "{d}/notpano.png", "-o", "{d}/v.png"))
 _add("bench unknown topic", C, "error", r"topic: expected one of", argv=("bench", "nosuch", "--out", "{d}/bench"))
 _add("unknown command", U, "usage", r"invalid choice", argv=("warpp",))
 _add("unknown option", U, "usage", r"unrecognized arguments: --bogus", argv=("samples", "--bogus"))
