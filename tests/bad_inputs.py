@@ -394,7 +394,7 @@ _add("stereo --f 0", U, "usage", r"argument --f: expected a positive number", ar
      "{d}/s.png"))
 _add("stereo --max-angle 0", U, "usage", r"argument --max-angle: expected an angle > 0", argv=("stereo", "{d}/a.json",
      "--max-angle", "0", "-o", "{d}/s.png"))
-_add("stereo --max-angle 95", U, "usage", r"argument --max-angle: .*<= 90", argv=("stereo", "{d}/a.json", "--max-angle", "95",
+_add("stereo --max-angle 95", U, "usage", r"argument --max-angle: .*<= 10", argv=("stereo", "{d}/a.json", "--max-angle", "95",
      "-o", "{d}/s.png"))
 _add("stereo --mode unknown", U, "usage", r"argument --mode: invalid choice", argv=("stereo", "{d}/a.json", "--mode", "3d",
      "-o", "{d}/s.png"))
@@ -529,6 +529,19 @@ _add("view --fov 1e-6 (was the library's fx)", C, "error", r"--fov: expected at 
      argv=("view", "{d}/pano.png", "--fov", "1e-6", "--width", "32", "--height", "16", "-o", "{d}/v.png"))
 _add("view of no known layout names --layout (was layout=)", C, "error", r"or pass --layout\n",
      argv=("view", "{d}/notpano.png", "-o", "{d}/v.png"))
+_add("stereo --max-angle 90 (60-70 % disocclusion)", U, "usage",
+     r"argument --max-angle: expected an angle > 0 and <= 10, got 90 \(.*comfortable", argv=("stereo", "{d}/a.json",
+     "--max-angle", "90", "-o", "{d}/s.png"))
+_add("stereo --max-angle 10 (the ceiling, valid)", C, "ok", r"stereo: wrote", argv=("stereo", "{d}/a.json",
+     "--max-angle", "10", "-o", "{d}/s.png"))
+_add("stereo --video on one view", C, "error", r"--video: only used with a sequence", argv=("stereo", "{d}/a.json",
+     "--video", "{d}/v.mp4", "-o", "{d}/s.png"), extra={"absent": ("s.png", "v.mp4")})
+_add("stereo --fps on one view", C, "error", r"--fps: only used with a sequence", argv=("stereo", "{d}/a.json",
+     "--fps", "5", "-o", "{d}/s.png"), extra={"absent": ("s.png",)})
+_add("stereo SEQ --fps without --video", C, "error", r"--fps: only with --video", argv=("stereo", "{d}/sub", "--fps", "5",
+     "-o", "{d}/st"), extra={"absent": ("st",)})
+_add("stereo on an image (was a JSON codec error)", C, "error", r"VIEW.json: expected a view file .*got the image .*img.png",
+     argv=("stereo", "{d}/img.png", "-o", "{d}/s.png"))
 _add("bench unknown topic", C, "error", r"topic: expected one of", argv=("bench", "nosuch", "--out", "{d}/bench"))
 _add("unknown command", U, "usage", r"invalid choice", argv=("warpp",))
 _add("unknown option", U, "usage", r"unrecognized arguments: --bogus", argv=("samples", "--bogus"))
