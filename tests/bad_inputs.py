@@ -353,6 +353,8 @@ _add("samples --out is a file", O, "error", r"--out: .* exists and is not a fold
 _add("view --site in a missing folder (was created with its parents)", O, "error",
      r"--site: the folder .*nodir/deeper of .* does not exist", argv=("view", "{d}/pano.png", "--site",
      "{d}/nodir/deeper/site"), extra={"absent": ("nodir",)})
+_add("timewarp -o named like a file (became a folder frames.png)", O, "error", r"-o: .*frames.png is named like a file",
+     argv=("timewarp", "{d}/a.json", "--poses", "{d}/poses.json", "-o", "{d}/frames.png"), extra={"absent": ("frames.png",)})
 _add("bench --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("bench", "synth", "--out", "{d}/notes.txt"))
 
 # ---- command-line ranges (parse time: exit 2 before any file is touched)
@@ -542,6 +544,8 @@ _add("stereo SEQ --fps without --video", C, "error", r"--fps: only with --video"
      "-o", "{d}/st"), extra={"absent": ("st",)})
 _add("stereo on an image (was a JSON codec error)", C, "error", r"VIEW.json: expected a view file .*got the image .*img.png",
      argv=("stereo", "{d}/img.png", "-o", "{d}/s.png"))
+_add("timewarp on an image (was a JSON codec error)", C, "error", r"VIEW.json: expected a view file .*got the image",
+     argv=("timewarp", "{d}/img.png", "--poses", "{d}/poses.json", "-o", "{d}/tw"))
 _add("bench unknown topic", C, "error", r"topic: expected one of", argv=("bench", "nosuch", "--out", "{d}/bench"))
 _add("unknown command", U, "usage", r"invalid choice", argv=("warpp",))
 _add("unknown option", U, "usage", r"unrecognized arguments: --bogus", argv=("samples", "--bogus"))
