@@ -355,6 +355,11 @@ _add("view --site in a missing folder (was created with its parents)", O, "error
      "{d}/nodir/deeper/site"), extra={"absent": ("nodir",)})
 _add("timewarp -o named like a file (became a folder frames.png)", O, "error", r"-o: .*frames.png is named like a file",
      argv=("timewarp", "{d}/a.json", "--poses", "{d}/poses.json", "-o", "{d}/frames.png"), extra={"absent": ("frames.png",)})
+_add("cubemap --layout files -o c.png (became a folder c.png)", O, "error", r"-o: .*c.png is named like a file",
+     argv=("cubemap", "{d}/pano.png", "--layout", "files", "-o", "{d}/c.png"), extra={"absent": ("c.png",)})
+_add("cubemap -o a face folder whose px.png is a folder (was a bare Errno 21)", O, "error",
+     r"-o: .*sub/px.png is a folder where a face file goes", argv=("cubemap", "{d}/pano.png", "-o", "{d}/sub"),
+     extra={"mkdir": "sub/px.png"})
 _add("bench --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("bench", "synth", "--out", "{d}/notes.txt"))
 
 # ---- command-line ranges (parse time: exit 2 before any file is touched)
@@ -531,6 +536,14 @@ _add("view --fov 1e-6 (was the library's fx)", C, "error", r"--fov: expected at 
      argv=("view", "{d}/pano.png", "--fov", "1e-6", "--width", "32", "--height", "16", "-o", "{d}/v.png"))
 _add("view of no known layout names --layout (was layout=)", C, "error", r"or pass --layout\n",
      argv=("view", "{d}/notpano.png", "-o", "{d}/v.png"))
+_add("cubemap of no known layout names --input-layout (was layout=)", C, "error", r"or pass --input-layout\n",
+     argv=("cubemap", "{d}/notpano.png", "-o", "{d}/c.png"))
+_add("cubemap --depth on a colour image to .png (was '-o: depth is float')", C, "error",
+     r"INPUT: .*pano.png is not a depth/range map but an 8-bit colour image", argv=("cubemap", "{d}/pano.png", "--depth",
+     "-o", "{d}/c.png"))
+_add("cubemap --depth on a colour image to .exr (was the library's image:)", C, "error",
+     r"INPUT: .*pano.png is not a depth/range map but an 8-bit colour image", argv=("cubemap", "{d}/pano.png", "--depth",
+     "-o", "{d}/c.exr"), extra={"absent": ("c.exr",)})
 _add("stereo --max-angle 90 (60-70 % disocclusion)", U, "usage",
      r"argument --max-angle: expected an angle > 0 and <= 10, got 90 \(.*comfortable", argv=("stereo", "{d}/a.json",
      "--max-angle", "90", "-o", "{d}/s.png"))
