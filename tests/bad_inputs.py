@@ -265,6 +265,7 @@ _add("--to wrapped camera", C, "ok", r"wrote", argv=("warp", "{d}/a.json", "--to
      extra={"camera_wrap": {}})
 _add("--to bare camera", C, "ok", r"wrote .*o.png", argv=("warp", "{d}/a.json", "--to", "{d}/cam.json", "-o", "{d}/o.png"))
 
+GEO = ("--center", "0", "0", "4", "--normal", "0", "0", "-1", "--size", "1", "1")  # a canvas in front of a.json
 
 # ---- outputs: extensions, folders, inputs (README: a failure never touches an existing file)
 O = "outputs"
@@ -360,6 +361,9 @@ _add("cubemap --layout files -o c.png (became a folder c.png)", O, "error", r"-o
 _add("cubemap -o a face folder whose px.png is a folder (was a bare Errno 21)", O, "error",
      r"-o: .*sub/px.png is a folder where a face file goes", argv=("cubemap", "{d}/pano.png", "-o", "{d}/sub"),
      extra={"mkdir": "sub/px.png"})
+_add("canvas on a face folder -o f.png (became a folder f.png)", O, "error", r"-o: .*f.png is named like a file",
+     argv=("canvas", "{d}/faces", "--image", "{d}/img.png", *GEO, "-o", "{d}/f.png"),
+     extra={"faces": "faces", "absent": ("f.png",)})
 _add("bench --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("bench", "synth", "--out", "{d}/notes.txt"))
 
 # ---- command-line ranges (parse time: exit 2 before any file is touched)
@@ -559,6 +563,12 @@ _add("stereo on an image (was a JSON codec error)", C, "error", r"VIEW.json: exp
      argv=("stereo", "{d}/img.png", "-o", "{d}/s.png"))
 _add("timewarp on an image (was a JSON codec error)", C, "error", r"VIEW.json: expected a view file .*got the image",
      argv=("timewarp", "{d}/img.png", "--poses", "{d}/poses.json", "-o", "{d}/tw"))
+_add("canvas --video a still image", C, "error", r"--video: .*img.png is a still image; use --image",
+     argv=("canvas", "{d}/a.json", "--video", "{d}/img.png", *GEO, "-o", "{d}/fr"), extra={"absent": ("fr",)})
+_add("canvas --fps with a frames folder", C, "error", r"--fps: only with a video file -o",
+     argv=("canvas", "{d}/a.json", "--video", "{d}/v.mp4", "--fps", "5", *GEO, "-o", "{d}/fr"), extra={"absent": ("fr",)})
+_add("canvas --video on a face folder (was a traceback)", C, "error", r"--video: not on a folder of faces",
+     argv=("canvas", "{d}/faces", "--video", "{d}/v.mp4", *GEO, "-o", "{d}/fr.mp4"), extra={"faces": "faces"})
 _add("bench unknown topic", C, "error", r"topic: expected one of", argv=("bench", "nosuch", "--out", "{d}/bench"))
 _add("unknown command", U, "usage", r"invalid choice", argv=("warpp",))
 _add("unknown option", U, "usage", r"unrecognized arguments: --bogus", argv=("samples", "--bogus"))
