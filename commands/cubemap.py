@@ -40,13 +40,35 @@ def add_arguments(parser) -> None:
                         "(default .png; use .exr for float or depth)")
 
 
+def _read(args):
+    """panorama.files.read_panorama, its hint naming --input-layout (was the library's layout=)."""
+    from panorama.files import read_panorama
+
+    try:
+        return read_panorama(args.input, layout=args.input_layout)
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("pass layout=", "pass --input-layout")) from None
+
+
+def _not_depth(pano, path) -> str | None:
+    """Why INPUT is no depth / range map for --depth (one float channel), or None."""
+    img = pano[0] if isinstance(pano, list) else pano
+    channels = 1 if img.ndim == 2 else img.shape[2]
+    if img.dtype.kind == "f" and channels == 1:
+        return None
+    bits = "float" if img.dtype.kind == "f" else f"{8 * img.dtype.itemsize}-bit"
+    return (f"INPUT: {path} is not a depth/range map but {'an' if bits[0] == '8' else 'a'} {bits} "
+            f"{'grey' if channels == 1 else 'colour'} "
+            f"image; --depth needs one float channel (EXR/TIFF/PFM)")
+
+
 def run(args) -> int:
     import panorama
     from ibr.io import write_image
-    from ibr.io.outputs import IMAGE_EXTS, OutputPlan
+    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
     from commands._common import face_file_patterns, image_for
     from panorama.directions import FACE_FILE_NAMES
-    from panorama.files import FACE_EXTS, read_panorama, write_cubemap
+    from panorama.files import FACE_EXTS, write_cubemap
 
     out = Path(args.output)
     ext = args.ext if args.ext.startswith(".") else "." + args.ext
@@ -60,17 +82,28 @@ def run(args) -> int:
         if not files_out and args.ext != ".png":
             raise ValueError(f"--ext: only used for a folder of face files (--layout files or -o without an "
                              f"extension); {out.name} is one image, its extension chooses the format")
+        if args.depth and (ext if files_out else out.suffix).lower() not in float_exts:
+            why = _not_depth(_read(args)[0], args.input)  # the input is the mistake, if it is no depth map
+            if why:
+                raise ValueError(why)
+            raise ValueError(f"{'--ext' if files_out else '-o'}: depth is float; use one of {', '.join(float_exts)}, "
+                             f"got {ext if files_out else out.name}")
         if files_out:
-            if args.depth and ext.lower() not in float_exts:
-                raise ValueError(f"--ext: depth faces are float; use one of {', '.join(float_exts)}, got {ext}")
+            if out.suffix.lower() in IMAGE_EXTS + ANIMATION_EXTS:
+                raise ValueError(f"-o: {out} is named like a file, but --layout files writes a folder of face "
+                                 "files (give a name without an image extension)")
+            for name in FACE_FILE_NAMES:
+                if (out / f"{name}{ext}").is_dir():
+                    raise IsADirectoryError(f"-o: {out / f'{name}{ext}'} is a folder where a face file goes; "
+                                            "rename it or choose another -o")
             target = plan.add_folder("-o", out, face_file_patterns(ext))
         else:
-            if args.depth and out.suffix.lower() not in float_exts:
-                raise ValueError(f"-o: depth is float; use one of {', '.join(float_exts)}, got {out.name}")
             target = plan.add_file("-o", out, IMAGE_EXTS)
         plan.check()  # every output checked before any work (#12)
 
-        pano, in_layout = read_panorama(args.input, layout=args.input_layout)
+        pano, in_layout = _read(args)
+        if args.depth and _not_depth(pano, args.input):
+            raise ValueError(_not_depth(pano, args.input))
         if in_layout == "equirect":
             if args.width is not None:
                 raise ValueError("--width: only used when converting a cubemap back to equirect; INPUT is "

@@ -13,6 +13,25 @@ HELP = "stereo pair from one RGB-D view: anaglyph, Dubois, side-by-side, top-bot
 MODES = ("anaglyph", "dubois", "sbs", "sbs-half", "tb", "tb-half", "interleaved", "separate")
 
 
+#: --max-angle's ceiling, degrees. The angle is the parallax the viewer sees on the screen;
+#: comfortable stereo keeps it within about 1-2 degrees. Far past that the eyes cannot fuse the pair
+#: and most of each eye is disocclusion (90 degrees left 60-70 % of the pixels filled in).
+MAX_ANGLE_DEG = 10.0
+
+
+def max_angle(text: str) -> float:
+    """argparse type of --max-angle: 0 < DEG <= MAX_ANGLE_DEG (the ceiling's reason in the message)."""
+    import argparse
+
+    from commands._common import number_in
+
+    try:
+        return number_in(0, MAX_ANGLE_DEG, lo_open=True, what="an angle")(text)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"{exc} (degrees of on-screen parallax; comfortable stereo stays within "
+                                         "1-2, past 10 the pair cannot be fused)") from None
+
+
 def add_arguments(parser) -> None:
     from commands._common import nonnegative_float, number_in, positive_float
 
@@ -20,9 +39,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--e", type=nonnegative_float, default=None, help="interaxial distance (scene units)")
     parser.add_argument("--f", type=positive_float, default=None, help="zero-parallax distance (scene units)")
     parser.add_argument("--auto", action="store_true", help="choose e and f from the depth (default)")
-    parser.add_argument("--max-angle", type=number_in(0, 90, lo_open=True, what="an angle"), default=1.6,
-                        metavar="DEG",
-                        help="parallax visual-angle limit for --auto (default: %(default)s)")
+    parser.add_argument("--max-angle", type=max_angle, default=1.6, metavar="DEG",
+                        help="parallax visual-angle limit for --auto and --f alone (with --e and --f: of the "
+                        "comfort warning), degrees (0 < DEG <= 10: comfortable stereo stays within 1-2 "
+                        "degrees, past 10 the pair cannot be fused; default: %(default)s)")
     parser.add_argument("--source", choices=("center", "left", "right"), default="center",
                         help="the input view is between the eyes (both new) or one eye (default: %(default)s)")
     parser.add_argument("--method", choices=("pixel", "mesh", "splat"), default="pixel",
@@ -49,7 +69,7 @@ def run(args) -> int:
 
     from commands._common import image_for, info
     from ibr.io import load_view, write_image
-    from ibr.io.outputs import OutputPlan
+    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
     from ibr.stereo.pair import check_stereo_supersample, no_valid_depth_message, pack_stereo, stereo_pair
     from ibr.stereo.stereo_camera import auto_stereo, comfort, max_interaxial_for_range
     from commands._sequence import is_sequence_argument, run_stereo  # sequences (#15)
@@ -57,7 +77,17 @@ def run(args) -> int:
     check_stereo_supersample(args.supersample, args.method)  # before any work, as the library says it
 
     if is_sequence_argument(args.view):
+        if args.fps is not None and args.video is None:
+            raise ValueError("--fps: only with --video (the video's frame rate)")
         return run_stereo(args)
+    for opt, given in (("--video", args.video is not None), ("--fps", args.fps is not None)):
+        if given:
+            raise ValueError(f"{opt}: only used with a sequence (a manifest or a folder of numbered views), "
+                             "not with one view file")
+    suffix = Path(args.view).suffix.lower()
+    if suffix in IMAGE_EXTS + ANIMATION_EXTS:
+        raise ValueError(f"VIEW.json: expected a view file (.json: color, depth and camera), got the "
+                         f"{'video' if suffix in ANIMATION_EXTS else 'image'} {args.view}")
     if args.auto and (args.e is not None or args.f is not None):
         raise ValueError("--auto: give either --auto or --e/--f, not both")
     if args.e is not None and args.f is None:

@@ -28,29 +28,33 @@ def add_arguments(parser) -> None:
                         "to <stem>_frames/) or a folder for frames only")
     parser.add_argument("--layout", default=None, choices=PANO_LAYOUTS, metavar="LAYOUT",
                         help=f"layout of PANO: {', '.join(PANO_LAYOUTS)} (default: from its shape)")
-    parser.add_argument("--yaw", type=finite_float, default=0.0,
-                        help="degrees, longitude of the view centre (0 = +z, 90 = +x, right; default: %(default)s)")
-    parser.add_argument("--pitch", type=finite_float, default=0.0, help="degrees, +90 looks straight up (default: %(default)s)")
-    parser.add_argument("--roll", type=finite_float, default=0.0, help="degrees, camera turned clockwise")
-    parser.add_argument("--fov", type=number_in(0, 180, lo_open=True, hi_open=True, what="an angle"), default=90.0,
-                        help="horizontal field of view, degrees (0 < fov < 180; default: %(default)s)")
-    parser.add_argument("--width", type=image_side, default=1280,
-                        help="output width in pixels (default: %(default)s)")
-    parser.add_argument("--height", type=image_side, default=720,
-                        help="output height in pixels (default: %(default)s)")
+    # defaults None: an option given where it has no effect is refused (run); _DEFAULTS fills them in
+    parser.add_argument("--yaw", type=finite_float, default=None,
+                        help="degrees, longitude of the view centre (0 = +z, 90 = +x, right; default: 0); "
+                        "with --serve the page's first view")
+    parser.add_argument("--pitch", type=finite_float, default=None, help="degrees, +90 looks straight up (default: 0)")
+    parser.add_argument("--roll", type=finite_float, default=None, help="degrees, camera turned clockwise")
+    parser.add_argument("--fov", type=number_in(0, 180, lo_open=True, hi_open=True, what="an angle"), default=None,
+                        help="horizontal field of view, degrees (0 < fov < 180; default: 90)")
+    parser.add_argument("--width", type=image_side, default=None,
+                        help="still or tour width in pixels (default: 1280)")
+    parser.add_argument("--height", type=image_side, default=None,
+                        help="still or tour height in pixels (default: 720)")
     parser.add_argument("--tour", type=frame_count, default=None, metavar="N",
                         help="write N frames turning once around (yaw from --yaw)")
-    parser.add_argument("--fps", type=frame_rate, default=12.0, help="tour frame rate (GIF/mp4)")
+    parser.add_argument("--fps", type=frame_rate, default=None,
+                        help="frame rate of a --tour animation (.gif/.mp4; default: 12)")
     parser.add_argument("--serve", action="store_true",
                         help="serve a WebGL viewer on http://127.0.0.1:PORT (Ctrl-C stops; a temporary "
                         "site folder is removed on exit)")
-    parser.add_argument("--port", type=port_number, default=8000, help="port for --serve (1..65535, 0 = any free)")
+    parser.add_argument("--port", type=port_number, default=None,
+                        help="port for --serve (1..65535, 0 = any free; default: 8000)")
     parser.add_argument("--site", default=None,
                         help="folder for the viewer's page and faces (default: a temporary folder); "
-                        "must be new or empty unless --force")
+                        "must be new or empty unless --force, in an existing folder")
     parser.add_argument("--force", action="store_true",
                         help="with --site: use a non-empty folder, replacing only the viewer's files there")
-    parser.add_argument("--face-size", type=image_side, default=None, help="face size for --serve")
+    parser.add_argument("--face-size", type=image_side, default=None, help="face size for --serve/--site")
     parser.add_argument("--tiles", action="store_true",
                         help="with --serve/--site: a multires tile pyramid (512-px tiles, faces up to 8192 px) "
                         "that the page loads as the view needs it: large panoramas open fast")
@@ -58,16 +62,16 @@ def add_arguments(parser) -> None:
                         help="with --serve/--site: range along each ray for an equirect PANO (what ibr stitch "
                         "writes as <stem>_depth.exr); the page draws the scene as quad meshes and shows "
                         "parallax when you move (keys w a s d q e, shift-drag)")
-    parser.add_argument("--head-box", type=positive_float, default=0.1,
+    parser.add_argument("--head-box", type=positive_float, default=None,
                         help="with --depth: how far the viewpoint may move from the centre, scene units "
-                        "(the meshes' level of detail is chosen for this move)")
+                        "(the meshes' level of detail is chosen for this move; default: 0.1)")
     parser.add_argument("--stereo", choices=("none", "top-bottom", "sbs"), default="none",
                         help="PANO is an ODS pair (ibr stitch --stereo ods): left eye on top (top-bottom) or "
                         "left | right (sbs); stills and tours show both eyes as --stereo-out; --serve/--site "
                         "writes both eyes and the page offers mono / anaglyph / side by side")
-    parser.add_argument("--stereo-out", choices=("anaglyph", "sbs"), default="anaglyph",
-                        help="how a stereo still/tour shows the eyes (and the web page's first mode): red-cyan "
-                        "anaglyph (default) or side by side")
+    parser.add_argument("--stereo-out", choices=("anaglyph", "sbs"), default=None,
+                        help="with --stereo: how a still/tour shows the eyes (with --serve: the page's first "
+                        "mode): red-cyan anaglyph (default) or side by side")
 
 
 def _write_animation(path: Path, frames, fps: float) -> None:
@@ -126,13 +130,16 @@ def _serve(args, pano, layout, depth=None) -> int:
             tour = pano if layout == "tour" else None
 
             def write(to):
-                if tour is not None:
-                    from panorama.tour import write_tour_site
+                try:
+                    if tour is not None:
+                        from panorama.tour import write_tour_site
 
-                    write_tour_site(to, tour, face_size=args.face_size, force=True)
-                else:
-                    write_site(to, pano, layout=layout, face_size=args.face_size, stereo=stereo, tiles=args.tiles,
-                               depth=depth, head_box=args.head_box)
+                        write_tour_site(to, tour, face_size=args.face_size, force=True)
+                    else:
+                        write_site(to, pano, layout=layout, face_size=args.face_size, stereo=stereo,
+                                   tiles=args.tiles, depth=depth, head_box=args.head_box)
+                except ValueError as exc:  # the library's face_size: is the user's --face-size
+                    raise ValueError(str(exc).replace("face_size:", "--face-size:", 1)) from None
 
             if temporary:
                 write(folder)
@@ -194,17 +201,103 @@ def _read_site_depth(args, pano, layout):
     return depth
 
 
+#: Defaults of the options whose argparse default is None (so that run can tell a given option).
+_DEFAULTS = {"yaw": 0.0, "pitch": 0.0, "roll": 0.0, "fov": 90.0, "width": 1280, "height": 720, "fps": 12.0,
+             "port": 8000, "head_box": 0.1, "stereo_out": "anaglyph"}
+
+
+def _option(name: str) -> str:
+    return {"output": "-o"}.get(name, "--" + name.replace("_", "-"))
+
+
+def _refuse_unused(args) -> None:
+    """Refuse an option given where it has no effect (it used to be ignored, exit 0); then fill in
+    the defaults of :data:`_DEFAULTS`."""
+    web = args.serve or args.site is not None
+    tour_file = Path(args.pano).suffix.lower() == ".json"
+    animation = args.tour is not None and args.output is not None and Path(args.output).suffix != ""
+    unused = []  # (option names, why)
+    if web:
+        unused += [(("output", "tour"), "not used with --serve/--site (the viewer goes to --site or a temporary "
+                    "folder); drop --serve/--site for a still or a tour"),
+                   (("width", "height"), "not used with --serve/--site (the page fills the browser window)")]
+        if not args.serve:
+            unused += [(("yaw", "pitch", "roll", "fov"), "only with --serve (the page's first view) or for a "
+                        "still/tour; --site alone stores no view"),
+                       (("port",), "only with --serve")]
+        if tour_file:
+            unused += [(("layout", "tiles", "depth", "head_box"), "not used for a tour file (its scenes are "
+                        "read as they are)")]
+    else:
+        unused += [(("tiles", "face_size"), "only with --serve/--site (the web viewer)"),
+                   (("port",), "only with --serve")]
+    if args.depth is None:
+        unused += [(("head_box",), "only with --depth")]
+    if not animation:
+        unused += [(("fps",), "only with --tour and an animation -o (.gif/.mp4)")]
+    if args.stereo == "none":
+        unused += [(("stereo_out",), "only with --stereo (an ODS pair)")]
+    elif web and not args.serve:
+        unused += [(("stereo_out",), "only with --serve (the page's first mode) or for a still/tour")]
+    for names, why in unused:
+        for name in names:
+            if getattr(args, name) is not None and getattr(args, name) is not False:  # 0 is given
+                raise ValueError(f"{_option(name)}: {why}")
+    if args.stereo != "none" and args.layout not in (None, "auto", "equirect"):
+        raise ValueError("--layout: a --stereo panorama is an equirect pair; --layout is not used")
+    if args.stereo != "none" and args.tiles:
+        raise ValueError("--tiles: tile pyramids are for mono panoramas; not with --stereo")
+    for name, value in _DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
+
+
+def _check_fov(args) -> None:
+    """A field of view so narrow that the focal length passes the camera's ceiling, named as --fov."""
+    import math
+
+    from ibr.base.validate import MAX_FOCAL_PX
+
+    if args.width / (2 * math.tan(math.radians(args.fov) / 2)) > MAX_FOCAL_PX:
+        least = math.degrees(2 * math.atan(args.width / (2 * MAX_FOCAL_PX)))
+        raise ValueError(f"--fov: expected at least {least:.3g} degrees at --width {args.width} (a focal length "
+                         f"of at most {MAX_FOCAL_PX:g} pixels), got {args.fov:g}")
+
+
+def _read_panorama(path, layout):
+    """panorama.files.read_panorama, its hint naming --layout (was the library's layout=)."""
+    from panorama.files import read_panorama
+
+    try:
+        return read_panorama(path, layout=layout)
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("pass layout=", "pass --layout")) from None
+
+
+def _check_site(site, force):
+    """--site: a new or empty folder (or --force) whose parent exists, as every other output."""
+    from panorama.viewer import check_site_folder
+
+    try:
+        check_site_folder(site, force=force)
+    except (NotADirectoryError, FileExistsError) as exc:
+        raise type(exc)(str(exc).replace("site:", "--site:", 1).replace(" (force=True)", "")) from None
+    parent = Path(site).parent
+    if not parent.is_dir():
+        raise FileNotFoundError(f"--site: the folder {parent} of {site} does not exist")
+
+
 def run(args) -> int:
     import panorama
     from commands._common import image_for
     from ibr.io import write_image
     from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
-    from panorama.files import read_panorama
-    from panorama.viewer import check_site_folder, to_uint8, tour_views  # noqa: F401
+    from panorama.viewer import to_uint8, tour_views
 
+    _refuse_unused(args)
     if args.serve or args.site is not None:
         if args.site is not None:
-            check_site_folder(args.site, force=args.force)  # before reading anything (#12)
+            _check_site(args.site, args.force)  # before reading anything (#12)
         elif args.force:
             raise ValueError("--force: only with --site")
         if Path(args.pano).suffix.lower() == ".json":  # a tour of several panoramas (panorama.tour)
@@ -221,7 +314,7 @@ def run(args) -> int:
             pano, layout = read_image(args.pano, what="PANO"), "equirect"
             split_stereo(pano, args.stereo)  # the packing is checked before the site is written
         else:
-            pano, layout = read_panorama(args.pano, layout=args.layout)
+            pano, layout = _read_panorama(args.pano, args.layout)
         depth = _read_site_depth(args, pano, layout) if args.depth is not None else None
         return _serve(args, pano, layout, depth)
     if args.depth is not None:
@@ -232,6 +325,7 @@ def run(args) -> int:
         raise ValueError(f"PANO: {args.pano} is a tour file; tours are shown by the web viewer: add --serve or --site DIR")
     if args.output is None:
         raise ValueError("-o/--output: required unless --serve is given")
+    _check_fov(args)
     out = Path(args.output)
     with OutputPlan("ibr view", log=info) as plan:
         plan.add_input("PANO", args.pano)
@@ -248,7 +342,7 @@ def run(args) -> int:
             eyes = split_stereo(read_image(args.pano, what="PANO"), args.stereo)
             pano, layout = eyes[0], "equirect"
         else:
-            eyes, (pano, layout) = None, read_panorama(args.pano, layout=args.layout)
+            eyes, (pano, layout) = None, _read_panorama(args.pano, args.layout)
         if args.tour is not None:
             kept = []
             kw = dict(pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov, width=args.width,

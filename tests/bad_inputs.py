@@ -265,6 +265,8 @@ _add("--to wrapped camera", C, "ok", r"wrote", argv=("warp", "{d}/a.json", "--to
      extra={"camera_wrap": {}})
 _add("--to bare camera", C, "ok", r"wrote .*o.png", argv=("warp", "{d}/a.json", "--to", "{d}/cam.json", "-o", "{d}/o.png"))
 
+GEO = ("--center", "0", "0", "4", "--normal", "0", "0", "-1", "--size", "1", "1")  # a canvas in front of a.json
+
 # ---- outputs: extensions, folders, inputs (README: a failure never touches an existing file)
 O = "outputs"
 _add("warp -o the source's colour image", O, "error", r"-o: .*a_color.png is the input VIEW 'color'",
@@ -349,6 +351,19 @@ _add("view --site is a file", O, "error", r"site: .* exists and is not a folder"
 _add("view --force without --serve", O, "error", r"--force: only with --site",
      argv=("view", "{d}/pano.png", "--force", "-o", "{d}/v.png"))
 _add("samples --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("samples", "--out", "{d}/notes.txt"))
+_add("view --site in a missing folder (was created with its parents)", O, "error",
+     r"--site: the folder .*nodir/deeper of .* does not exist", argv=("view", "{d}/pano.png", "--site",
+     "{d}/nodir/deeper/site"), extra={"absent": ("nodir",)})
+_add("timewarp -o named like a file (became a folder frames.png)", O, "error", r"-o: .*frames.png is named like a file",
+     argv=("timewarp", "{d}/a.json", "--poses", "{d}/poses.json", "-o", "{d}/frames.png"), extra={"absent": ("frames.png",)})
+_add("cubemap --layout files -o c.png (became a folder c.png)", O, "error", r"-o: .*c.png is named like a file",
+     argv=("cubemap", "{d}/pano.png", "--layout", "files", "-o", "{d}/c.png"), extra={"absent": ("c.png",)})
+_add("cubemap -o a face folder whose px.png is a folder (was a bare Errno 21)", O, "error",
+     r"-o: .*sub/px.png is a folder where a face file goes", argv=("cubemap", "{d}/pano.png", "-o", "{d}/sub"),
+     extra={"mkdir": "sub/px.png"})
+_add("canvas on a face folder -o f.png (became a folder f.png)", O, "error", r"-o: .*f.png is named like a file",
+     argv=("canvas", "{d}/faces", "--image", "{d}/img.png", *GEO, "-o", "{d}/f.png"),
+     extra={"faces": "faces", "absent": ("f.png",)})
 _add("bench --out is a file", O, "error", r"--out: .* exists and is not a folder", argv=("bench", "synth", "--out", "{d}/notes.txt"))
 
 # ---- command-line ranges (parse time: exit 2 before any file is touched)
@@ -390,7 +405,7 @@ _add("stereo --f 0", U, "usage", r"argument --f: expected a positive number", ar
      "{d}/s.png"))
 _add("stereo --max-angle 0", U, "usage", r"argument --max-angle: expected an angle > 0", argv=("stereo", "{d}/a.json",
      "--max-angle", "0", "-o", "{d}/s.png"))
-_add("stereo --max-angle 95", U, "usage", r"argument --max-angle: .*<= 90", argv=("stereo", "{d}/a.json", "--max-angle", "95",
+_add("stereo --max-angle 95", U, "usage", r"argument --max-angle: .*<= 10", argv=("stereo", "{d}/a.json", "--max-angle", "95",
      "-o", "{d}/s.png"))
 _add("stereo --mode unknown", U, "usage", r"argument --mode: invalid choice", argv=("stereo", "{d}/a.json", "--mode", "3d",
      "-o", "{d}/s.png"))
@@ -498,6 +513,62 @@ _add("view without -o", C, "error", r"-o/--output: required unless --serve", arg
 _add("view -o .bmp", O, "error", r"-o: .*v.bmp has the extension '.bmp'", argv=("view", "{d}/pano.png", "-o", "{d}/v.bmp"))
 _add("view --tour -o .txt", O, "error", r"-o: .*t.txt has the extension '.txt'; expected one of .gif",
      argv=("view", "{d}/pano.png", "--tour", "2", "-o", "{d}/t.txt"))
+# options that had no effect where they were given (exit 0, silently ignored), library words
+_add("view -o with --site (the still was never written)", C, "error", r"-o: not used with --serve/--site",
+     argv=("view", "{d}/pano.png", "-o", "{d}/v.png", "--site", "{d}/site"), extra={"absent": ("site", "v.png")})
+_add("view --tiles for a still", C, "error", r"--tiles: only with --serve/--site", argv=("view", "{d}/pano.png",
+     "--tiles", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --face-size for a still", C, "error", r"--face-size: only with --serve/--site", argv=("view", "{d}/pano.png",
+     "--face-size", "8", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --fps for a still", C, "error", r"--fps: only with --tour and an animation -o", argv=("view", "{d}/pano.png",
+     "--fps", "5", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --tour --fps into a frames folder", C, "error", r"--fps: only with --tour and an animation -o",
+     argv=("view", "{d}/pano.png", "--tour", "2", "--fps", "5", "-o", "{d}/tour"), extra={"absent": ("tour",)})
+_add("view --head-box without --depth", C, "error", r"--head-box: only with --depth", argv=("view", "{d}/pano.png",
+     "--head-box", "1", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --stereo-out without --stereo", C, "error", r"--stereo-out: only with --stereo", argv=("view", "{d}/pano.png",
+     "--stereo-out", "sbs", "-o", "{d}/v.png"), extra={"absent": ("v.png",)})
+_add("view --port with --site only", C, "error", r"--port: only with --serve", argv=("view", "{d}/pano.png", "--site",
+     "{d}/site", "--port", "0"), extra={"absent": ("site",)})
+_add("view --yaw with --site only (the site stores no view)", C, "error", r"--yaw: only with --serve",
+     argv=("view", "{d}/pano.png", "--site", "{d}/site", "--yaw", "30"), extra={"absent": ("site",)})
+_add("view --width with --serve", C, "error", r"--width: not used with --serve/--site", argv=("view", "{d}/pano.png",
+     "--serve", "--width", "16"))
+_add("view --layout with --stereo (read as an equirect pair)", C, "error", r"--layout: a --stereo panorama is an equirect",
+     argv=("view", "{d}/pano.png", "--stereo", "sbs", "--layout", "dice", "-o", "{d}/v.png"))
+_add("view --fov 1e-6 (was the library's fx)", C, "error", r"--fov: expected at least .* degrees at --width 32",
+     argv=("view", "{d}/pano.png", "--fov", "1e-6", "--width", "32", "--height", "16", "-o", "{d}/v.png"))
+_add("view of no known layout names --layout (was layout=)", C, "error", r"or pass --layout\n",
+     argv=("view", "{d}/notpano.png", "-o", "{d}/v.png"))
+_add("cubemap of no known layout names --input-layout (was layout=)", C, "error", r"or pass --input-layout\n",
+     argv=("cubemap", "{d}/notpano.png", "-o", "{d}/c.png"))
+_add("cubemap --depth on a colour image to .png (was '-o: depth is float')", C, "error",
+     r"INPUT: .*pano.png is not a depth/range map but an 8-bit colour image", argv=("cubemap", "{d}/pano.png", "--depth",
+     "-o", "{d}/c.png"))
+_add("cubemap --depth on a colour image to .exr (was the library's image:)", C, "error",
+     r"INPUT: .*pano.png is not a depth/range map but an 8-bit colour image", argv=("cubemap", "{d}/pano.png", "--depth",
+     "-o", "{d}/c.exr"), extra={"absent": ("c.exr",)})
+_add("stereo --max-angle 90 (60-70 % disocclusion)", U, "usage",
+     r"argument --max-angle: expected an angle > 0 and <= 10, got 90 \(.*comfortable", argv=("stereo", "{d}/a.json",
+     "--max-angle", "90", "-o", "{d}/s.png"))
+_add("stereo --max-angle 10 (the ceiling, valid)", C, "ok", r"stereo: wrote", argv=("stereo", "{d}/a.json",
+     "--max-angle", "10", "-o", "{d}/s.png"))
+_add("stereo --video on one view", C, "error", r"--video: only used with a sequence", argv=("stereo", "{d}/a.json",
+     "--video", "{d}/v.mp4", "-o", "{d}/s.png"), extra={"absent": ("s.png", "v.mp4")})
+_add("stereo --fps on one view", C, "error", r"--fps: only used with a sequence", argv=("stereo", "{d}/a.json",
+     "--fps", "5", "-o", "{d}/s.png"), extra={"absent": ("s.png",)})
+_add("stereo SEQ --fps without --video", C, "error", r"--fps: only with --video", argv=("stereo", "{d}/sub", "--fps", "5",
+     "-o", "{d}/st"), extra={"absent": ("st",)})
+_add("stereo on an image (was a JSON codec error)", C, "error", r"VIEW.json: expected a view file .*got the image .*img.png",
+     argv=("stereo", "{d}/img.png", "-o", "{d}/s.png"))
+_add("timewarp on an image (was a JSON codec error)", C, "error", r"VIEW.json: expected a view file .*got the image",
+     argv=("timewarp", "{d}/img.png", "--poses", "{d}/poses.json", "-o", "{d}/tw"))
+_add("canvas --video a still image", C, "error", r"--video: .*img.png is a still image; use --image",
+     argv=("canvas", "{d}/a.json", "--video", "{d}/img.png", *GEO, "-o", "{d}/fr"), extra={"absent": ("fr",)})
+_add("canvas --fps with a frames folder", C, "error", r"--fps: only with a video file -o",
+     argv=("canvas", "{d}/a.json", "--video", "{d}/v.mp4", "--fps", "5", *GEO, "-o", "{d}/fr"), extra={"absent": ("fr",)})
+_add("canvas --video on a face folder (was a traceback)", C, "error", r"--video: not on a folder of faces",
+     argv=("canvas", "{d}/faces", "--video", "{d}/v.mp4", *GEO, "-o", "{d}/fr.mp4"), extra={"faces": "faces"})
 _add("bench unknown topic", C, "error", r"topic: expected one of", argv=("bench", "nosuch", "--out", "{d}/bench"))
 _add("unknown command", U, "usage", r"invalid choice", argv=("warpp",))
 _add("unknown option", U, "usage", r"unrecognized arguments: --bogus", argv=("samples", "--bogus"))
