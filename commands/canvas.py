@@ -152,7 +152,7 @@ def run(args) -> int:
     import ibr.canvas as C
     from commands._common import face_file_patterns, info
     from ibr.io import read_image
-    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, VIDEO_EXTS, OutputPlan
+    from ibr.io.outputs import IMAGE_EXTS, VIDEO_EXTS, OutputPlan
 
     if args.video is None and (args.frames is not None or args.fps is not None):
         raise ValueError("--frames, --fps: only with --video")
@@ -166,9 +166,6 @@ def run(args) -> int:
     if face_folder and args.video is not None:  # each frame would be six faces (was a traceback)
         raise ValueError("--video: not on a folder of faces; make SCENE one image first "
                          "(ibr cubemap FACES -o pano.png)")
-    if face_folder and out.suffix.lower() in IMAGE_EXTS + ANIMATION_EXTS:
-        raise ValueError(f"-o: {out} is named like a file, but SCENE is a folder of faces and -o a folder of "
-                         "px.png ... nz.png (give a name without an image extension)")
     with OutputPlan("ibr canvas", log=info) as plan:
         if Path(args.scene).suffix.lower() in _VIEW_EXTS:
             plan.add_view_input("SCENE", args.scene)

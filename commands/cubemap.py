@@ -65,7 +65,7 @@ def _not_depth(pano, path) -> str | None:
 def run(args) -> int:
     import panorama
     from ibr.io import write_image
-    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
+    from ibr.io.outputs import IMAGE_EXTS, OutputPlan
     from commands._common import face_file_patterns, image_for
     from panorama.directions import FACE_FILE_NAMES
     from panorama.files import FACE_EXTS, write_cubemap
@@ -89,13 +89,6 @@ def run(args) -> int:
             raise ValueError(f"{'--ext' if files_out else '-o'}: depth is float; use one of {', '.join(float_exts)}, "
                              f"got {ext if files_out else out.name}")
         if files_out:
-            if out.suffix.lower() in IMAGE_EXTS + ANIMATION_EXTS:
-                raise ValueError(f"-o: {out} is named like a file, but --layout files writes a folder of face "
-                                 "files (give a name without an image extension)")
-            for name in FACE_FILE_NAMES:
-                if (out / f"{name}{ext}").is_dir():
-                    raise IsADirectoryError(f"-o: {out / f'{name}{ext}'} is a folder where a face file goes; "
-                                            "rename it or choose another -o")
             target = plan.add_folder("-o", out, face_file_patterns(ext))
         else:
             target = plan.add_file("-o", out, IMAGE_EXTS)

@@ -193,11 +193,6 @@ def _run_sequences(args) -> int:
     if args.panorama or args.holes_out or (args.depth_out not in (None, "none")):
         raise ValueError("VIEW.json: with sequences, -o is a folder of pano_NNNN.png (+ pano_NNNN_depth.exr "
                          "unless --depth-out none); --panorama, --holes-out and a --depth-out path do not apply")
-    from ibr.io.outputs import IMAGE_EXTS
-
-    if Path(args.output).suffix.lower() in IMAGE_EXTS:  # was made a folder of that name
-        raise ValueError(f"-o: with sequences the output is a folder receiving pano_NNNN.png, got the file name "
-                         f"{args.output}")
     seqs = [load_sequence(p) for p in args.views]
     lengths = {len(s.views) for s in seqs}
     if len(lengths) != 1:

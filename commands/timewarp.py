@@ -83,9 +83,6 @@ def run(args) -> int:
     if suffix in IMAGE_EXTS + ANIMATION_EXTS:
         raise ValueError(f"VIEW.json: expected a view file (.json: color, depth and camera), got the "
                          f"{'video' if suffix in ANIMATION_EXTS else 'image'} {args.view}")
-    if Path(args.out).suffix.lower() in IMAGE_EXTS + ANIMATION_EXTS:
-        raise ValueError(f"-o: {args.out} is named like a file; ibr timewarp writes a folder of frame_0000.png ... "
-                         "(give a name without an image or video extension)")
     with OutputPlan("ibr timewarp", log=info) as plan:
         plan.add_view_input("VIEW", args.view)
         plan.add_input("--poses", args.poses)

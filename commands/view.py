@@ -275,16 +275,13 @@ def _read_panorama(path, layout):
 
 
 def _check_site(site, force):
-    """--site: a new or empty folder (or --force) whose parent exists, as every other output."""
+    """--site: a new or empty folder (or --force); created with its parents, as every folder output."""
     from panorama.viewer import check_site_folder
 
     try:
         check_site_folder(site, force=force)
     except (NotADirectoryError, FileExistsError) as exc:
         raise type(exc)(str(exc).replace("site:", "--site:", 1).replace(" (force=True)", "")) from None
-    parent = Path(site).parent
-    if not parent.is_dir():
-        raise FileNotFoundError(f"--site: the folder {parent} of {site} does not exist")
 
 
 def run(args) -> int:

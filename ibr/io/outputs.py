@@ -307,9 +307,16 @@ class OutputPlan:
                                     "exist; create that folder or choose another")
         if p.exists() and not p.is_dir():
             raise NotADirectoryError(f"{o.option}: {p} exists and is not a folder")
+        if not p.exists() and p.suffix.lower() in IMAGE_EXTS + ANIMATION_EXTS + JSON_EXTS:  # would become a folder
+            raise ValueError(f"{o.option}: {p} is named like a file, but this output is a folder (of "
+                             f"{', '.join(o.patterns)}); give a name without a file extension")
         self._check_folder_inputs(o)
         if p.is_dir():
             o.create = False
+            taken = [e for e in p.iterdir() if e.is_dir() and matches_patterns(e.name, o.patterns)]
+            if taken:  # a frame would be written onto a folder (IsADirectoryError after the work)
+                raise IsADirectoryError(f"{o.option}: {taken[0]} is a folder where an output file goes; rename it "
+                                        f"or choose another {o.option}")
         else:
             anchor = _abs(p).parent
             while not anchor.exists():
