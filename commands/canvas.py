@@ -106,6 +106,12 @@ class _Target:
         kw = {"rng": self.rng} if self.layout == "equirect" and self.rng is not None else {}
         return composite_panorama(self.pano, canvases, layout=self.layout, antialias=self.antialias, **kw)
 
+    def viewpoint(self):
+        """The scene's camera centre (a view) or the panorama's centre (the origin), world frame."""
+        import numpy as np
+
+        return self.view.camera.position if self.is_view else np.zeros(3)
+
     def screen_to_canvas(self, points, canvas):
         """Canvas polylines of a stroke given in SCENE pixels."""
         import numpy as np
@@ -142,6 +148,18 @@ def _write(path, img, plan, name=None):
     from ibr.io import write_image
 
     write_image(plan.stage(path, name) if name else plan.stage(path), image_for(path, img))
+
+
+def _note_back_side(geo, viewpoint) -> None:
+    """Say so when the viewpoint sees the canvas from behind: a canvas has two faces and is drawn
+    mirrored from its back (a user who gave the opposite --normal saw mirrored text, no word)."""
+    import numpy as np
+
+    from commands._common import info
+
+    if float(np.dot(np.asarray(geo["normal"], float), viewpoint - np.asarray(geo["center"], float))) < 0:
+        info("canvas: the viewpoint sees its back (--normal points away from it), so it is drawn mirrored; "
+             "give the opposite --normal to see its front")
 
 
 def run(args) -> int:
@@ -189,6 +207,7 @@ def run(args) -> int:
         plan.check()  # every output checked before any work
 
         target = _Target(args)
+        _note_back_side(geo, target.viewpoint())
         if args.image is not None:
             img = read_image(args.image, what="--image")
             canvas = C.canvas_from_image(img, resolution=args.resolution, power_of_two=args.power_of_two,

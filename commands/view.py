@@ -193,7 +193,7 @@ def _read_site_depth(args, pano, layout):
 
     if args.stereo != "none" or args.tiles or Path(args.pano).suffix.lower() == ".json":
         raise ValueError("--depth: parallax from depth is for one mono panorama without --tiles or --stereo")
-    depth = read_depth(args.depth, what="--depth")
+    depth = read_depth(args.depth, what="--depth", name_channel="")
     try:
         check_depth_site(pano, layout, None, False, depth)
     except ValueError as exc:

@@ -150,3 +150,16 @@ def test_bad_input(scene, capsys):
                  "-o", str(tmp / color_file)]) == 1
     assert (tmp / color_file).read_bytes() == snapshot
     assert main(["canvas", str(tmp / "v.json"), *GEO, "-o", str(tmp / "x.png")]) == 2  # no content given
+
+
+def test_a_canvas_seen_from_its_back_is_said_to_be_mirrored(scene, capsys):
+    """A canvas has two faces; from behind it is drawn mirrored. With the opposite --normal a user
+    saw mirrored text and no word of why: now the command says so (and only then)."""
+    tmp, view, poster = scene
+    back = ["--center", "0.1", "0", "3", "--normal", "-0.2", "0", "1", "--size", "1.2", "0.8"]
+    assert main(["canvas", str(tmp / "v.json"), "--image", str(tmp / "poster.png"), *back, "-o", str(tmp / "b.png")]) == 0
+    assert "sees its back (--normal points away from it), so it is drawn mirrored" in capsys.readouterr().err
+    front = read_image(tmp / "o.png") if (tmp / "o.png").exists() else None
+    assert main(["canvas", str(tmp / "v.json"), "--image", str(tmp / "poster.png"), *GEO, "-o", str(tmp / "f.png")]) == 0
+    assert "sees its back" not in capsys.readouterr().err
+    assert front is None and not np.array_equal(read_image(tmp / "b.png"), read_image(tmp / "f.png"))
