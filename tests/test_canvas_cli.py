@@ -159,7 +159,6 @@ def test_a_canvas_seen_from_its_back_is_said_to_be_mirrored(scene, capsys):
     back = ["--center", "0.1", "0", "3", "--normal", "-0.2", "0", "1", "--size", "1.2", "0.8"]
     assert main(["canvas", str(tmp / "v.json"), "--image", str(tmp / "poster.png"), *back, "-o", str(tmp / "b.png")]) == 0
     assert "sees its back (--normal points away from it), so it is drawn mirrored" in capsys.readouterr().err
-    front = read_image(tmp / "o.png") if (tmp / "o.png").exists() else None
     assert main(["canvas", str(tmp / "v.json"), "--image", str(tmp / "poster.png"), *GEO, "-o", str(tmp / "f.png")]) == 0
     assert "sees its back" not in capsys.readouterr().err
-    assert front is None and not np.array_equal(read_image(tmp / "b.png"), read_image(tmp / "f.png"))
+    assert not np.array_equal(read_image(tmp / "b.png"), read_image(tmp / "f.png"))
