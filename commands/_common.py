@@ -232,18 +232,47 @@ def _stale_kernels(name: str) -> bool:
 def _index_stamp(index: Path):
     """The source stamp of numba cache index ``index`` (numba.core.caching.IndexDataCacheFile: the
     numba version, pickled, then the pickled (stamp, overloads)); None when it was written by
-    another numba version or cannot be read."""
-    import importlib.metadata
+    another numba version or cannot be read. The overloads are read without importing the
+    classes they name (numba's types: importing numba here cost every run 0.15 s before the
+    first-run helper could start)."""
     import pickle
+
+    class Unresolved(pickle.Unpickler):
+        def find_class(self, module, name):
+            return _Placeholder
 
     try:
         with open(index, "rb") as f:
-            if pickle.load(f) != importlib.metadata.version("numba"):
+            if pickle.load(f) != _numba_version():
                 return None
-            stamp, _ = pickle.loads(f.read())
+            stamp, _ = Unresolved(f).load()
     except Exception:  # noqa: BLE001 - a truncated or foreign file: not an index numba would load
         return None
     return stamp
+
+
+class _Placeholder:
+    """Stands for any class an index names (built, never used)."""
+
+    def __init__(self, *args, **kwargs):
+        pass
+
+    def __setstate__(self, state):
+        pass
+
+
+def _numba_version() -> str:
+    """numba's version from its installed metadata (read once: each lookup scans the
+    distributions, ~10 ms), without importing numba."""
+    global _NUMBA_VERSION
+    if _NUMBA_VERSION is None:
+        import importlib.metadata
+
+        _NUMBA_VERSION = importlib.metadata.version("numba")
+    return _NUMBA_VERSION
+
+
+_NUMBA_VERSION = None
 
 
 def _numba_cache_dir(path: Path) -> Path | None:
