@@ -286,7 +286,8 @@ def run(args) -> int:
             t0 = time.perf_counter()                           # sources, built with the first frame
             mesh_a, mesh_b = source_mesh(view_a), source_mesh(view_b)
             info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads, built in {(time.perf_counter() - t0) * 1e3:.1f} ms "
-                 "(once; reused for every frame)")
+                 f"(once, {'compiling' if compiling else 'loading'} the segmentation kernels included; reused for "
+                 "every frame)")
 
         frames_iter = iter_interpolate(view_a, view_b, ts, method=args.method, composite_mode=args.composite,
                                        fill=args.fill, interpolation=args.interpolation,
