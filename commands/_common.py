@@ -209,10 +209,11 @@ def _note_first_run(modules, warm: str) -> bool:
 
 def _stale_kernels(name: str) -> bool:
     """Whether kernel module ``name`` has no numba cache index that numba would load: none written
-    by this numba for the source as it is now (numba stamps an index with the SHA-256 of the
-    source's bytes, so a source touched but unchanged, e.g. by a git checkout, stays cached), in
-    the folder numba caches it in (:func:`_numba_cache_dir`). False when that cannot be told (a
-    module in a zip file)."""
+    by this numba for the source as it is now, in the folder numba caches it in
+    (:func:`_numba_cache_dir`). numba 0.68 stamps an index with the SHA-256 of the source's bytes
+    (a source touched but unchanged, e.g. by a git checkout, stays cached), earlier versions with
+    the source's (mtime, size); both are recognized. False when that cannot be told (a module in
+    a zip file)."""
     import hashlib
     import importlib.util
 
@@ -221,12 +222,13 @@ def _stale_kernels(name: str) -> bool:
         return False
     path = Path(spec.origin)
     try:
-        stamp = hashlib.sha256(path.read_bytes()).digest()
+        st = path.stat()
+        fresh = (hashlib.sha256(path.read_bytes()).digest(), (st.st_mtime, st.st_size))
         cache = _numba_cache_dir(path)
         indexes = list(cache.glob(f"{path.stem}.*.nbi")) if cache is not None and cache.is_dir() else []
     except OSError:
         return False
-    return not any(_index_stamp(p) == stamp for p in indexes)
+    return not any(_index_stamp(p) in fresh for p in indexes)
 
 
 def _index_stamp(index: Path):
