@@ -410,3 +410,21 @@ def test_batch_sees_every_form_of_an_output_option(tmp_path, views, capsys):
     assert record["outputs"]
     records = [json.loads(p.read_text()) for p in (tmp_path / ".ibr-batch").glob("warp-*.json")]
     assert sorted(o for r in records for o in r["outputs"]) == ["out/k10.exr", "out/k10.png", "out/k8.png", "out/k9.png"]
+
+
+def test_inputs_and_none_values_of_output_options_are_not_outputs(tmp_path):
+    """canvas --video CLIP is the clip shown on the plane (an input: staged, the job failed with
+    "video: file not found"), and --depth-out none writes no file (staged as a path, the job failed
+    with "--depth-out: none has no extension"); with and without ibr's parser."""
+    from cli import build_parser
+
+    path = tmp_path / "j.json"
+    path.write_text(json.dumps([
+        ["canvas", "a.json", "--video", "clip.mp4", "--center", "0", "0", "3", "--normal", "0", "0", "-1",
+         "--size", "1", "1", "-o", "frames"],
+        ["stitch", "a.json", "b.json", "-o", "p.png", "--depth-out", "none"],
+        ["stitch", "a.json", "b.json", "-o", "q.png", "--depth-out", "q_depth.exr"]]))
+    for parser in (build_parser(), None):
+        canvas, stitch, both = load_jobs(path, parser=parser) if parser else load_jobs(path)
+        assert canvas.outputs == ("frames",) and stitch.outputs == ("p.png",)
+        assert both.outputs == ("q.png", "q_depth.exr")

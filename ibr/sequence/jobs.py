@@ -86,6 +86,15 @@ STAGE_PREFIX = ".ibr-batch-"
 #: Options whose value is an output path, for jobs that do not list their ``outputs``.
 OUTPUT_OPTIONS = ("-o", "--out", "--output", "--video", "--contact-sheet", "--obj", "--ply", "--viz",
                   "--depth-out", "--holes-out", "--report", "--coverage", "--cube", "--site")
+#: Of those, the ones a command reads instead (``ibr canvas --video CLIP``: the clip shown on the plane).
+INPUT_OPTIONS = {"canvas": ("--video",)}
+#: Values of an output option that name no file (``--depth-out none``: no depth written).
+NO_OUTPUT = ("none",)
+
+
+def _is_output(command: str, option: str, value) -> bool:
+    return (option in OUTPUT_OPTIONS and option not in INPUT_OPTIONS.get(command, ())
+            and isinstance(value, str) and value not in NO_OUTPUT)
 
 #: Thread-count variables set to ``threads_per_job`` in each job's process (the pool, not the job,
 #: uses the cores): numba, OpenMP/BLAS, OpenCV's parallel_for.
@@ -156,7 +165,7 @@ def _option_value_pairs(argv):
 
 
 def _infer_outputs(argv) -> tuple:
-    return tuple(val for _, opt, val in _option_value_pairs(argv) if opt in OUTPUT_OPTIONS)
+    return tuple(val for _, opt, val in _option_value_pairs(argv) if _is_output(argv[0], opt, val))
 
 
 def _on_command_line(argv, value: str) -> bool:
@@ -192,12 +201,14 @@ def _parsed_outputs(parser, args, argv) -> tuple:
         return _infer_outputs(argv)
     values = []
     for action in sub._actions:
-        if not set(action.option_strings) & set(OUTPUT_OPTIONS):
+        options = [o for o in action.option_strings if _is_output(argv[0], o, "")]
+        if not options:
             continue
         value = getattr(args, action.dest, None)
         if value is None or value is action.default or isinstance(value, bool):
             continue
-        values += [v for v in (value if isinstance(value, (list, tuple)) else [value]) if isinstance(v, str)]
+        given = value if isinstance(value, (list, tuple)) else [value]
+        values += [v for v in given if _is_output(argv[0], options[0], v)]
     # a default output (interpolate's "out") is not on the command line: it cannot be redirected
     return tuple(dict.fromkeys(v for v in values if _on_command_line(argv, v)))
 
