@@ -107,8 +107,9 @@ def run(args) -> int:
             faces = panorama.equirect_to_cubemap(pano, size, layout="list", depth=args.depth,
                                                  interpolation=args.interpolation)
             staged = plan.stage(target)
-            as_written = Path(f"face{ext}") if files_out else out  # the extension the faces are stored in
-            write_cubemap(staged, [image_for(as_written, f) for f in faces], layout=layout, ext=ext)
+            as_written = out / f"px{ext}" if files_out else out  # the extension the faces are stored in
+            what = "--ext" if files_out else "-o"
+            write_cubemap(staged, [image_for(as_written, f, what) for f in faces], layout=layout, ext=ext)
             plan.commit()
             written = [out / f"{n}{ext}" for n in FACE_FILE_NAMES] if files_out else [out]
             info(f"cubemap: {w}x{h} equirect -> {layout} faces of {size}px: "

@@ -289,6 +289,7 @@ def run(args) -> int:
     from commands._common import image_for
     from ibr.io import write_image
     from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
+    from ibr.io.images import check_unit_colour
     from panorama.viewer import to_uint8, tour_views
 
     _refuse_unused(args)
@@ -312,6 +313,8 @@ def run(args) -> int:
             split_stereo(pano, args.stereo)  # the packing is checked before the site is written
         else:
             pano, layout = _read_panorama(args.pano, args.layout)
+            check_unit_colour("PANO", pano, "the viewer's 8-bit faces",
+                              "a range map is the --depth of a colour PANO")
         depth = _read_site_depth(args, pano, layout) if args.depth is not None else None
         return _serve(args, pano, layout, depth)
     if args.depth is not None:
@@ -340,6 +343,11 @@ def run(args) -> int:
             pano, layout = eyes[0], "equirect"
         else:
             eyes, (pano, layout) = None, _read_panorama(args.pano, args.layout)
+            eight_bit = args.tour is not None or out.suffix.lower() in (".png", ".jpg", ".jpeg")
+            if eight_bit:  # before any view is rendered
+                tour = args.tour is not None
+                check_unit_colour("PANO", pano, "the tour's frames" if tour else out.name,
+                                  f"view {'a still of ' if tour else ''}it to .exr, .tif or .pfm")
         if args.tour is not None:
             kept = []
             kw = dict(pitch_deg=args.pitch, roll_deg=args.roll, fov_deg=args.fov, width=args.width,

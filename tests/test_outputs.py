@@ -662,8 +662,12 @@ def test_a_range_map_is_refused_as_8bit_grey_not_written_white(tmp_path):
     with pytest.raises(ValueError, match=r"pano: the site's faces .* a range map is the depth"):
         write_site(tmp_path / "site", rng)
     assert not (tmp_path / "site").exists()
-    assert cli.main(["view", str(tmp_path / "range.exr"), "--yaw", "-90", "-o", str(tmp_path / "v.png")]) == 1
-    assert not (tmp_path / "v.png").exists()
+    for argv in (["-o", "v.png"], ["--tour", "2", "-o", "tour"], ["--site", "site"]):  # before any view
+        assert cli.main(["view", str(tmp_path / "range.exr"), *argv[:-1], str(tmp_path / argv[-1])]) == 1
+        assert not (tmp_path / argv[-1]).exists()
+    grey_hdr = np.full((32, 64), 0.3, np.float32)
+    grey_hdr[:4, :4] = 3.0  # a grey image with highlights, not a range map: clipped as colour is
+    assert (image_for(tmp_path / "gh.png", grey_hdr) == np.rint(0.3 * 255)).mean() > 0.9
     grey = np.linspace(0, 1, 64, dtype=np.float32)[None].repeat(32, 0)
     np.testing.assert_array_equal(image_for(tmp_path / "g.png", grey)[0], np.rint(grey[0] * 255).astype(np.uint8))
     hdr = np.full((32, 64, 3), 3.0, np.float32)  # HDR colour clips (highlights), as before
