@@ -316,6 +316,22 @@ def test_stitch_takes_a_rig_file_or_its_folder(tmp_path, capsys):
     bad.write_text(json.dumps({"format": "ibr-rig", "version": 1, "views": ["a.json"], "centre": [0, 0, 0]}))
     assert _cli("stitch", bad, "-o", tmp_path / "y.png") == 1
     assert "unknown key 'centre' (did you mean 'center'?)" in capsys.readouterr().err
+    bad.write_text('{"format": "ibr-rig", "version": 1, "views": [}')  # a typo: still a rig, its error named
+    assert _cli("stitch", tmp_path, "-o", tmp_path / "y.png") == 1
+    assert "rig file" in (err := capsys.readouterr().err) and "not valid JSON" in err
+    # a rig elsewhere, naming views outside its folder, with a centre off the cameras' centroid:
+    # the centre is the rig's (as --center gives it), not the default centroid
+    (tmp_path / "off").mkdir()
+    import os
+
+    off = {"format": "ibr-rig", "version": 1, "views": [os.path.relpath(v, tmp_path / "off") for v in views],
+           "center": [0.05, 0.0, 0.0]}
+    (tmp_path / "off" / "rig.json").write_text(json.dumps(off))
+    assert _cli("stitch", tmp_path / "off", "-o", tmp_path / "off.png", "--width", 64, "--depth-out", "none") == 0
+    assert _cli("stitch", *views, "--center", 0.05, 0, 0, "-o", tmp_path / "c.png", "--width", 64,
+                "--depth-out", "none") == 0
+    np.testing.assert_array_equal(cv2.imread(str(tmp_path / "off.png")), cv2.imread(str(tmp_path / "c.png")))
+    assert not np.array_equal(cv2.imread(str(tmp_path / "off.png")), ref)
 
 
 def test_stitch_refuses_options_it_would_ignore(manifest, tmp_path, capsys):

@@ -308,8 +308,9 @@ class OutputPlan:
         if p.exists() and not p.is_dir():
             raise NotADirectoryError(f"{o.option}: {p} exists and is not a folder")
         if not p.exists() and p.suffix.lower() in IMAGE_EXTS + ANIMATION_EXTS + JSON_EXTS:  # would become a folder
-            raise ValueError(f"{o.option}: {p} is named like a file, but this output is a folder (of "
-                             f"{', '.join(o.patterns)}); give a name without a file extension")
+            shown = ", ".join(o.patterns[:3]) + (", ..." if len(o.patterns) > 3 else "")
+            raise ValueError(f"{o.option}: {p} is named like a file, but this output is a folder (of {shown}); "
+                             "give a name without a file extension")
         self._check_folder_inputs(o)
         if p.is_dir():
             o.create = False

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ibr.base.camera import Camera
-from ibr.base.validate import check_finite_scalar, check_image_size, check_keys, check_relative_path
+from ibr.base.validate import check_finite_scalar, check_image_size, check_keys
 from ibr.base.ray_camera import SphericalCamera
 
 from ..directions import WORLD_FROM_FACE
@@ -130,10 +130,14 @@ class RigFile:
 
 
 def is_rig_file(path) -> bool:
-    """Whether ``path`` is a rig file, or a folder holding one (:data:`RIG_FILE_NAME`)."""
+    """Whether ``path`` is a rig: a file named :data:`RIG_FILE_NAME`, a folder holding one, or a
+    JSON file of format "ibr-rig" (a broken rig.json is still a rig: :func:`read_rig` names its
+    error, it is not taken for something else)."""
     p = Path(path)
     if p.is_dir():
-        p = p / RIG_FILE_NAME
+        return (p / RIG_FILE_NAME).is_file()
+    if p.name == RIG_FILE_NAME:
+        return True
     if p.suffix.lower() != ".json" or not p.is_file():
         return False
     try:
@@ -145,9 +149,10 @@ def is_rig_file(path) -> bool:
 
 def read_rig(path) -> RigFile:
     """Read a rig file (or the :data:`RIG_FILE_NAME` of a folder). Keys: ``format`` ("ibr-rig"),
-    ``version`` (1), ``views`` (view files relative to the rig file, at least one), ``center``
-    (optional 3-vector, default the origin), ``scene`` (optional name), ``panorama`` (optional
-    ``{"color", "range", "width"}``). Unknown keys are refused with the nearest valid name."""
+    ``version`` (1), ``views`` (view files, relative to the rig file's folder or absolute; at
+    least one), ``center`` (optional 3-vector, default the origin), ``scene`` (optional name),
+    ``panorama`` (optional ``{"color", "range", "width"}``). Unknown keys are refused with the
+    nearest valid name (docs/files.md)."""
     p = Path(path)
     if p.is_dir():
         p = p / RIG_FILE_NAME
@@ -163,9 +168,9 @@ def read_rig(path) -> RigFile:
     if doc["format"] != "ibr-rig" or doc["version"] != 1:
         raise ValueError(f"{where}: expected format 'ibr-rig' version 1, got {doc['format']!r} {doc['version']!r}")
     views = doc["views"]
-    if not isinstance(views, list) or not views or not all(isinstance(v, str) for v in views):
+    if not isinstance(views, list) or not views or not all(isinstance(v, str) and v.strip() for v in views):
         raise ValueError(f"{where}: 'views' must be a non-empty list of view file names")
-    paths = tuple(p.parent / check_relative_path(f"{where}: 'views'", v) for v in views)
+    paths = tuple(p.parent / v for v in views)  # read only: relative to the rig file, or absolute
     try:
         center = _center(doc.get("center", (0.0, 0.0, 0.0)))
     except (TypeError, ValueError) as exc:
@@ -173,5 +178,7 @@ def read_rig(path) -> RigFile:
     pano = doc.get("panorama")
     if pano is not None:
         check_keys(f"{where}: 'panorama'", pano, ("color", "range", "width"), required=("color", "range"))
-        pano = tuple(p.parent / check_relative_path(f"{where}: 'panorama' {k!r}", pano[k]) for k in ("color", "range"))
+        if not all(isinstance(pano[k], str) and pano[k].strip() for k in ("color", "range")):
+            raise ValueError(f"{where}: 'panorama': 'color' and 'range' must be file names")
+        pano = tuple(p.parent / pano[k] for k in ("color", "range"))
     return RigFile(paths, center, pano)
