@@ -150,6 +150,17 @@ def image_for(path, img, what: str = "-o"):
     return a
 
 
+def read_panorama_arg(path, layout, option: str):
+    """panorama.files.read_panorama, its layout hint naming the command's ``option`` (was the
+    library's ``layout=``)."""
+    from panorama.files import read_panorama
+
+    try:
+        return read_panorama(path, layout=layout)
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("pass layout=", f"pass {option}")) from None
+
+
 def face_file_patterns(ext: str | None = None) -> tuple[str, ...]:
     """The file names of a folder of cube faces (px.png .. nz.exr, every image extension, and
     ``ext`` as the user spelt it, e.g. .PNG), for an output plan's frame folder: exactly these,

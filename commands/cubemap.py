@@ -41,13 +41,9 @@ def add_arguments(parser) -> None:
 
 
 def _read(args):
-    """panorama.files.read_panorama, its hint naming --input-layout (was the library's layout=)."""
-    from panorama.files import read_panorama
+    from commands._common import read_panorama_arg
 
-    try:
-        return read_panorama(args.input, layout=args.input_layout)
-    except ValueError as exc:
-        raise ValueError(str(exc).replace("pass layout=", "pass --input-layout")) from None
+    return read_panorama_arg(args.input, args.input_layout, "--input-layout")
 
 
 def _not_depth(pano, path) -> str | None:
@@ -95,8 +91,9 @@ def run(args) -> int:
         plan.check()  # every output checked before any work (#12)
 
         pano, in_layout = _read(args)
-        if args.depth and _not_depth(pano, args.input):
-            raise ValueError(_not_depth(pano, args.input))
+        why = _not_depth(pano, args.input) if args.depth else None
+        if why:
+            raise ValueError(why)
         if in_layout == "equirect":
             if args.width is not None:
                 raise ValueError("--width: only used when converting a cubemap back to equirect; INPUT is "

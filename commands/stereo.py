@@ -69,7 +69,7 @@ def run(args) -> int:
 
     from commands._common import image_for, info
     from ibr.io import load_view, write_image
-    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
+    from ibr.io.outputs import OutputPlan
     from ibr.stereo.pair import check_stereo_supersample, no_valid_depth_message, pack_stereo, stereo_pair
     from ibr.stereo.stereo_camera import auto_stereo, comfort, max_interaxial_for_range
     from commands._sequence import is_sequence_argument, run_stereo  # sequences (#15)
@@ -84,10 +84,6 @@ def run(args) -> int:
         if given:
             raise ValueError(f"{opt}: only used with a sequence (a manifest or a folder of numbered views), "
                              "not with one view file")
-    suffix = Path(args.view).suffix.lower()
-    if suffix in IMAGE_EXTS + ANIMATION_EXTS:
-        raise ValueError(f"VIEW.json: expected a view file (.json: color, depth and camera), got the "
-                         f"{'video' if suffix in ANIMATION_EXTS else 'image'} {args.view}")
     if args.auto and (args.e is not None or args.f is not None):
         raise ValueError("--auto: give either --auto or --e/--f, not both")
     if args.e is not None and args.f is None:

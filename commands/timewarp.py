@@ -75,14 +75,6 @@ def run(args) -> int:
     from ibr.io.outputs import OutputPlan
     from ibr.stereo.timewarp import timewarp, timewarp_mode
 
-    from pathlib import Path
-
-    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS
-
-    suffix = Path(args.view).suffix.lower()
-    if suffix in IMAGE_EXTS + ANIMATION_EXTS:
-        raise ValueError(f"VIEW.json: expected a view file (.json: color, depth and camera), got the "
-                         f"{'video' if suffix in ANIMATION_EXTS else 'image'} {args.view}")
     with OutputPlan("ibr timewarp", log=info) as plan:
         plan.add_view_input("VIEW", args.view)
         plan.add_input("--poses", args.poses)

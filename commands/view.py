@@ -264,16 +264,6 @@ def _check_fov(args) -> None:
                          f"of at most {MAX_FOCAL_PX:g} pixels), got {args.fov:g}")
 
 
-def _read_panorama(path, layout):
-    """panorama.files.read_panorama, its hint naming --layout (was the library's layout=)."""
-    from panorama.files import read_panorama
-
-    try:
-        return read_panorama(path, layout=layout)
-    except ValueError as exc:
-        raise ValueError(str(exc).replace("pass layout=", "pass --layout")) from None
-
-
 def _check_site(site, force):
     """--site: a new or empty folder (or --force); created with its parents, as every folder output."""
     from panorama.viewer import check_site_folder
@@ -289,6 +279,7 @@ def run(args) -> int:
     from commands._common import image_for
     from ibr.io import write_image
     from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
+    from commands._common import read_panorama_arg
     from ibr.io.images import check_unit_colour
     from panorama.viewer import to_uint8, tour_views
 
@@ -312,7 +303,7 @@ def run(args) -> int:
             pano, layout = read_image(args.pano, what="PANO"), "equirect"
             split_stereo(pano, args.stereo)  # the packing is checked before the site is written
         else:
-            pano, layout = _read_panorama(args.pano, args.layout)
+            pano, layout = read_panorama_arg(args.pano, args.layout, "--layout")
             check_unit_colour("PANO", pano, "the viewer's 8-bit faces",
                               "a range map is the --depth of a colour PANO")
         depth = _read_site_depth(args, pano, layout) if args.depth is not None else None
@@ -342,7 +333,7 @@ def run(args) -> int:
             eyes = split_stereo(read_image(args.pano, what="PANO"), args.stereo)
             pano, layout = eyes[0], "equirect"
         else:
-            eyes, (pano, layout) = None, _read_panorama(args.pano, args.layout)
+            eyes, (pano, layout) = None, read_panorama_arg(args.pano, args.layout, "--layout")
             eight_bit = args.tour is not None or out.suffix.lower() in (".png", ".jpg", ".jpeg")
             if eight_bit:  # before any view is rendered
                 tour = args.tour is not None

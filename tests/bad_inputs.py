@@ -556,9 +556,9 @@ _add("stereo --fps on one view", C, "error", r"--fps: only used with a sequence"
      "--fps", "5", "-o", "{d}/s.png"), extra={"absent": ("s.png",)})
 _add("stereo SEQ --fps without --video", C, "error", r"--fps: only with --video", argv=("stereo", "{d}/sub", "--fps", "5",
      "-o", "{d}/st"), extra={"absent": ("st",)})
-_add("stereo on an image (was a JSON codec error)", C, "error", r"VIEW.json: expected a view file .*got the image .*img.png",
+_add("stereo on an image (was a JSON codec error)", C, "error", r"view file .*img.png: an image, not a JSON file \(a view file is .json",
      argv=("stereo", "{d}/img.png", "-o", "{d}/s.png"))
-_add("timewarp on an image (was a JSON codec error)", C, "error", r"VIEW.json: expected a view file .*got the image",
+_add("timewarp on an image (was a JSON codec error)", C, "error", r"img.png: an image, not a JSON file",
      argv=("timewarp", "{d}/img.png", "--poses", "{d}/poses.json", "-o", "{d}/tw"))
 _add("canvas --video a still image", C, "error", r"--video: .*img.png is a still image; use --image",
      argv=("canvas", "{d}/a.json", "--video", "{d}/img.png", *GEO, "-o", "{d}/fr"), extra={"absent": ("fr",)})

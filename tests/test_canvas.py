@@ -403,3 +403,23 @@ def test_review_findings_grey_targets_ray_alpha_rgba_order_and_float64():
     assert r[23, 31].tolist() == [1.0, 0.0, 0.0]
     v64 = composite(View(np.zeros((48, 64, 3), np.float64), None, cam), [half])
     assert v64.color.dtype == np.float64 and v64.color[23, 31, 0] == pytest.approx(128 / 255, abs=1e-3)
+
+
+def test_a_screen_stroke_is_clipped_to_the_screen_and_split_where_it_leaves_it(monkeypatch):
+    """Sampling every half pixel grew with a segment's length off screen (+-1e6 px: 4M samples, 3 s);
+    segments are clipped to the screen first, and a stroke that leaves the screen and comes back
+    is two parts (not joined by a line across the canvas)."""
+    import ibr.canvas.strokes as strokes
+
+    picked = []
+    pick = strokes.pick_pixels
+    monkeypatch.setattr(strokes, "pick_pixels", lambda cam, uv, *a, **k: picked.append(len(uv)) or pick(cam, uv, *a, **k))
+    cam = Camera.from_fov(200, 100, hfov_deg=60)
+    c = Canvas((0, 0, 2), (0, 0, -1), (1.0, 0.5), resolution=(100, 50))
+    (part,) = stroke_from_screen(cam, [[-1e6, 50], [1e6, 50]], c)
+    assert picked == [401]  # the 200 px on screen, every half pixel
+    np.testing.assert_allclose(part[[0, -1], 0], [-0.5, 99.5], atol=1.0)
+    parts = stroke_from_screen(cam, [[80, 50], [80, -500], [120, -500], [120, 50]], c)
+    assert len(parts) == 2 and all(np.ptp(p[:, 0]) < 1e-6 for p in parts)  # two vertical pieces
+    (dot,) = stroke_from_screen(cam, [[100, 50]], c)
+    assert dot.shape == (1, 2)

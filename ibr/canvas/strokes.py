@@ -139,15 +139,18 @@ def stroke_from_screen(camera: Camera, uv, canvas: Canvas, *, depth=None, others
         them is a no-op).
     """
     q = check_array("uv", uv, dtype_kind="fiu").astype(np.float64).reshape(-1, 2)
-    samples, vertex = _densify(q, SCREEN_STEP_PX)
-    items = [canvas] + list(others)
-    index, xy, _ = pick_pixels(camera, samples, items, depth=depth, depth_tol=depth_tol)
-    on = index == 0
+    if not np.all(np.isfinite(q)):
+        raise ValueError("uv: expected finite pixel coordinates")
+    w, h = camera.shape[1], camera.shape[0]
+    samples, vertex, piece = _densify(q, SCREEN_STEP_PX, (-0.5, -0.5, w - 0.5, h - 0.5))
     parts = []
-    for start, stop in _runs(on):
-        keep = vertex[start:stop].copy()
-        keep[[0, -1]] = True  # where the part enters and leaves the canvas
-        parts.append(xy[start:stop][keep])
+    if len(samples):
+        items = [canvas] + list(others)
+        index, xy, _ = pick_pixels(camera, samples, items, depth=depth, depth_tol=depth_tol)
+        for start, stop in _runs(index == 0, piece):
+            keep = vertex[start:stop].copy()
+            keep[[0, -1]] = True  # where the part enters and leaves the canvas
+            parts.append(xy[start:stop][keep])
     return parts
 
 
@@ -155,23 +158,58 @@ def stroke_from_screen(camera: Camera, uv, canvas: Canvas, *, depth=None, others
 SCREEN_STEP_PX = 0.5
 
 
-def _densify(points, step: float):
-    """(samples (M, 2), is_vertex (M,) bool): the polyline ``points`` sampled at most ``step``
-    apart along each segment, its own points included (flagged)."""
-    if len(points) < 2:
-        return points, np.ones(len(points), bool)
-    out, flag = [], []
-    for a, b in zip(points[:-1], points[1:]):
-        n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
-        t = np.arange(n)[:, None] / n
-        out.append(a + t * (b - a))
-        flag.append(np.arange(n) == 0)
-    out.append(points[-1:])
-    flag.append(np.array([True]))
-    return np.concatenate(out), np.concatenate(flag)
+def _densify(points, step: float, box):
+    """(samples (M, 2), is_vertex (M,) bool, piece (M,) int): the polyline ``points`` clipped to
+    the screen rectangle ``box`` (u0, v0, u1, v1) and sampled at most ``step`` apart along each
+    segment (its own points flagged as vertices); ``piece`` numbers the stretches that are
+    continuous on screen (a segment leaving the screen ends one: a stroke that leaves and comes
+    back is two parts, and a segment far off screen costs no samples)."""
+    out, flag, piece = [], [], []
+    k, prev_end = 0, None
+    segments = zip(points[:-1], points[1:]) if len(points) > 1 else [(points[0], points[0])] * len(points)
+    for a, b in segments:
+        clipped = _clip_segment(a, b, box)
+        if clipped is None:
+            continue
+        t0, t1 = clipped
+        n = int(np.ceil(np.linalg.norm(b - a) * (t1 - t0) / step))
+        t = t0 + (t1 - t0) * np.arange(n + 1) / max(n, 1)  # one sample for a single point
+        if prev_end is None or t0 > 0 or not np.array_equal(prev_end, a):
+            k += 1  # a new continuous stretch
+        else:
+            t = t[1:]  # the previous segment's last sample is this one's first
+        out.append(a + t[:, None] * (b - a))
+        flag.append((t == 0) | (t == 1))
+        piece.append(np.full(len(t), k))
+        prev_end = b if t1 == 1 else None
+    if not out:
+        return np.empty((0, 2)), np.empty(0, bool), np.empty(0, int)
+    return np.concatenate(out), np.concatenate(flag), np.concatenate(piece)
 
 
-def _runs(mask):
-    """(start, stop) of every run of True in the 1-D bool ``mask``."""
-    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    return list(zip(np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]))
+def _clip_segment(a, b, box):
+    """(t0, t1) of the part of segment a + t (b - a), t in [0, 1], inside ``box`` (Liang-Barsky),
+    or None when none is."""
+    t0, t1 = 0.0, 1.0
+    d = b - a
+    for p, q in ((-d[0], a[0] - box[0]), (d[0], box[2] - a[0]), (-d[1], a[1] - box[1]), (d[1], box[3] - a[1])):
+        if p == 0:
+            if q < 0:
+                return None
+            continue
+        r = q / p
+        if p < 0:
+            t0 = max(t0, r)
+        else:
+            t1 = min(t1, r)
+        if t0 > t1:
+            return None
+    return t0, t1
+
+
+def _runs(mask, piece):
+    """(start, stop) of every run of True in the 1-D bool ``mask`` within one ``piece``."""
+    cut = np.concatenate([[True], piece[1:] != piece[:-1]])
+    starts = np.nonzero(mask & (cut | ~np.concatenate([[False], mask[:-1]])))[0]
+    ends = np.nonzero(mask & (np.concatenate([cut[1:], [True]]) | ~np.concatenate([mask[1:], [False]])))[0] + 1
+    return list(zip(starts, ends))

@@ -75,7 +75,20 @@ def read_json(path, what: str):
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{what} {path}: not valid JSON ({exc})") from None
+        raise _not_json(what, path, exc) from None
+
+
+def _not_json(what: str, path: Path, exc) -> ValueError:
+    """The error for a file that does not parse as JSON; an image or a video (by its extension)
+    is named as one (`ibr stereo photo.png` said "'utf-8' codec can't decode byte 0x89")."""
+    from .outputs import ANIMATION_EXTS, IMAGE_EXTS
+
+    kind = {**dict.fromkeys(IMAGE_EXTS + (".bmp", ".webp"), "an image"), **dict.fromkeys(ANIMATION_EXTS, "a video")}
+    got = kind.get(path.suffix.lower())
+    if got:
+        return ValueError(f"{what} {path}: {got}, not a JSON file (a view file is .json: it names the colour and "
+                          "depth images and the camera)")
+    return ValueError(f"{what} {path}: not valid JSON ({exc})")
 
 
 def _param(params: dict, key: str, where: str, *, allow_inf: bool = False) -> float:
@@ -341,7 +354,7 @@ def load_camera(path, *, what: str = "camera file") -> Camera:
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{what} {path}: not valid JSON ({exc})") from None
+        raise _not_json(what, path, exc) from None
     where = f"{what} {path}"
     if isinstance(doc, dict) and "format" in doc:
         if doc["format"] != VIEW_FORMAT:
