@@ -413,7 +413,8 @@ def test_a_screen_stroke_is_clipped_to_the_screen_and_split_where_it_leaves_it(m
 
     picked = []
     pick = strokes.pick_pixels
-    monkeypatch.setattr(strokes, "pick_pixels", lambda cam, uv, *a, **k: picked.append(len(uv)) or pick(cam, uv, *a, **k))
+    monkeypatch.setattr(strokes, "pick_pixels",
+                        lambda cam, uv, *a, **k: picked.append(len(uv)) or pick(cam, uv, *a, **k))
     cam = Camera.from_fov(200, 100, hfov_deg=60)
     c = Canvas((0, 0, 2), (0, 0, -1), (1.0, 0.5), resolution=(100, 50))
     (part,) = stroke_from_screen(cam, [[-1e6, 50], [1e6, 50]], c)
