@@ -69,8 +69,7 @@ def load_cameras(path, display):
 def run(args) -> int:
     from dataclasses import replace
 
-    from commands._common import info, progress
-    from commands._common import image_for
+    from commands._common import image_for, info, progress
     from ibr.io import load_view, write_image
     from ibr.io.outputs import OutputPlan
     from ibr.stereo.timewarp import timewarp, timewarp_mode
