@@ -375,3 +375,24 @@ def test_render_mesh_rejects_bad_arguments():
     with pytest.raises(ValueError, match="depth_tol"):
         rasterize_mesh(mesh, cam, depth_tol=-1)
     View(np.zeros((12, 16, 3)), None, cam)  # (sanity: a View without depth is fine as data)
+
+
+@pytest.mark.parametrize("hfov", [70.0, 170.0])
+def test_a_ground_plane_whose_horizon_runs_along_a_pixel_edge_is_drawn_whole(hfov):
+    """A level camera of even height has its horizon on a row boundary: the floor's fitted plane
+    puts the quad's top corners ~4e8 away, and the bounding box was clipped at 1e-7 of that
+    (z = 40), so only one row of the floor was drawn (0.021 of the image instead of 0.5; at 170
+    degrees "sees nothing"). The clip is now relative to the nearest corner in front."""
+    import ibr
+
+    cam = Camera.from_fov(64, 48, hfov_deg=hfov)
+    u, v = cam.pixel_grid()
+    z = np.where(v > cam.cy, cam.fy / (v - cam.cy), np.nan).astype(np.float32)  # the floor y = 1
+    view = View(np.full((48, 64, 3), 0.5, np.float32), z, cam)
+    out = ibr.warp(view, cam, fill="none")
+    np.testing.assert_array_equal(~out.holes, np.isfinite(z))
+    moved = cam.with_pose(np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0.5], [0, 0, 0, 1.0]]))
+    ref = rasterize_mesh_reference(build_mesh(view), moved)
+    got = rasterize_mesh(build_mesh(view), moved)
+    assert got.coverage.mean() > 0.45
+    np.testing.assert_array_equal(got.coverage, ref.coverage)

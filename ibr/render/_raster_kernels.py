@@ -130,8 +130,15 @@ def _setup_quads(q0, q1, rects, planes, ks, r, t, kt_inv, kt, width, height, coe
             # test the whole target image (the per-pixel tests stay exact)
             umin, vmin, umax, vmax = -1.0, -1.0, float(width), float(height)
         else:
-            zmax = max(max(abs(z0), abs(z1)), max(abs(z2), abs(z3)))
-            eps = 1e-7 * zmax
+            # clip a hair in front of the target camera: 1e-7 of the corner nearest to its plane,
+            # in front or behind (the part between the plane and eps projects beyond the clamp
+            # anyway). Relative to the farthest corner, a ground plane whose horizon ran along the
+            # quad's edge (corners at 4e8) was clipped at z = 40: its visible part, one row drawn
+            zabs = np.inf
+            for zc in (z0, z1, z2, z3):
+                if zc != 0.0 and abs(zc) < zabs:
+                    zabs = abs(zc)
+            eps = 1e-7 * zabs if zabs < np.inf else 0.0
             lim = 4.0 * (width + height) + 16.0
             umin, umax, vmin, vmax = np.inf, -np.inf, np.inf, -np.inf
             umin, umax, vmin, vmax = _clip_edge(x0, y0, z0, x1, y1, z1, eps, kt, lim, umin, umax, vmin, vmax)
