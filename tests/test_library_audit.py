@@ -269,3 +269,27 @@ def test_canvas_float_image_outside_0_1_is_refused_whatever_its_float_type(dtype
     a = canvas_from_image((img / 255.0).astype(np.float32), [0, 0, 3], [0, 0, -1], [1, 1])
     b = canvas_from_image((img / 255.0).astype(dtype), [0, 0, 3], [0, 0, -1], [1, 1])
     np.testing.assert_allclose(a.rgba, b.rgba, atol=1e-6)
+
+
+def test_view_colour_big_endian_is_made_native_and_non_finite_is_refused():
+    """Big-endian float/uint16 colour reached the numba kernels (a TypingError traceback); NaN or
+    inf colour was accepted and the hole fill spread it over every filled pixel."""
+    import ibr
+    from ibr.base.view import View
+
+    from samples import DATA_DIR
+
+    a, b = ibr.load_view(DATA_DIR / "clutter_a.json"), ibr.load_view(DATA_DIR / "clutter_b.json")
+    native = ibr.warp(View((a.color / 255).astype("<f4"), a.depth, a.camera), b.camera)
+    for dtype in (">f4", ">u2"):
+        colour = (a.color / 255).astype(dtype) if dtype[1] == "f" else (a.color.astype(np.uint16) * 257).astype(dtype)
+        v = View(colour, a.depth, a.camera)
+        assert v.color.dtype.isnative and np.array_equal(v.color, colour)
+        got = ibr.warp(v, b.camera)
+        if dtype == ">f4":
+            np.testing.assert_array_equal(got.color, native.color)
+    bad = (a.color / 255).astype(np.float32)
+    bad[100:110, 100:110] = np.nan
+    bad[0, 0, 0] = np.inf
+    with pytest.raises(ValueError, match=r"color: 301 non-finite value\(s\)"):
+        View(bad, a.depth, a.camera)

@@ -43,6 +43,14 @@ class View:
 
     def __post_init__(self):
         color = check_color("color", self.color)
+        if not color.dtype.isnative:  # big-endian data (a FITS or network buffer): the kernels read native
+            color = color.astype(color.dtype.newbyteorder("="))
+            object.__setattr__(self, "color", color)
+        if color.dtype.kind == "f":
+            bad = int(color.size - np.count_nonzero(np.isfinite(color)))
+            if bad:  # the fill spread them over every hole
+                raise ValueError(f"color: {bad} non-finite value(s) (NaN or inf); colour must be finite "
+                                 "(mark missing pixels by NaN depth instead)")
         if not isinstance(self.camera, Camera):
             raise TypeError(f"camera: expected a Camera, got {type(self.camera).__name__}")
         if color.shape[:2] != self.camera.shape:
