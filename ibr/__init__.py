@@ -45,6 +45,7 @@ _EXPORTS = {
     "QuadMesh": "mesh.quad_mesh",
     "warp": "render.view_synthesis",
     "interpolate": "render.view_synthesis",
+    "iter_interpolate": "render.view_synthesis",
     "Rendering": "render.view_synthesis",
     # Modules that were top-level before the stage layout (#9): ``ibr.base.depth``, ``ibr.stereo.lens`` ...
     # keep working as attributes.

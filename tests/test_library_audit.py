@@ -293,3 +293,23 @@ def test_view_colour_big_endian_is_made_native_and_non_finite_is_refused():
     bad[0, 0, 0] = np.inf
     with pytest.raises(ValueError, match=r"color: 301 non-finite value\(s\)"):
         View(bad, a.depth, a.camera)
+
+
+def test_iter_interpolate_is_top_level_and_checks_before_the_first_frame():
+    """ibr.iter_interpolate did not exist (only ibr.render's), and its options were checked at the
+    first next(); a misspelt mesh_options key reached build_mesh ("unexpected keyword argument")."""
+    import inspect
+
+    import ibr
+    from ibr.base.validate import MESH_OPTIONS
+    from ibr.mesh.quad_mesh import build_mesh
+    from samples import DATA_DIR
+
+    a, b = ibr.load_view(DATA_DIR / "clutter_a.json"), ibr.load_view(DATA_DIR / "clutter_b.json")
+    with pytest.raises(ValueError, match="fill: expected one of"):
+        ibr.iter_interpolate(a, b, [0.5], fill="bogus")  # no next(): raised at the call
+    frames = list(ibr.iter_interpolate(a, b, [0.25, 0.5]))
+    assert [f.t for f in frames] == [0.25, 0.5]
+    assert MESH_OPTIONS == tuple(k for k in inspect.signature(build_mesh).parameters if k != "view")
+    with pytest.raises(ValueError, match=r"mesh_options: unknown key 'max_eror_px' \(did you mean 'max_error_px'\?\)"):
+        ibr.interpolate(a, b, 0.5, mesh_options={"max_eror_px": 0.1})

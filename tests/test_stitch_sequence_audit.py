@@ -168,7 +168,7 @@ def test_stitch_names_bad_views_center_and_mesh_options():
         ods_cameras(16, center="abc")
     with pytest.raises(TypeError, match="mesh_options: expected a dict"):
         stitch_rgbd([v], 16, mesh_options=3)                      # was "'int' object is not iterable"
-    with pytest.raises(TypeError, match=r"mesh_options: unknown option 'max_eror_px' \(did you mean 'max_error_px'\?\)"):
+    with pytest.raises(ValueError, match=r"mesh_options: unknown key 'max_eror_px' \(did you mean 'max_error_px'\?\)"):
         stitch_rgbd([v], 16, mesh_options={"max_eror_px": 1.0})
     a = stitch_rgbd([v], 16, mesh_options={"max_error_px": 0.5})
     b = stitch_rgbd([v], 16, mesh_options={"max_error_px": 0.5})

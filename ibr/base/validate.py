@@ -136,13 +136,19 @@ def check_positive(name: str, value, *, allow_inf: bool = False) -> float:
     return out
 
 
+#: The keyword options of ``ibr.build_mesh`` (``mesh_options`` of the renderers).
+MESH_OPTIONS = ("threshold", "max_error_px", "method", "baseline", "near", "far", "min_band", "quantization")
+
+
 def check_mesh_options(mesh_options) -> dict:
-    """``mesh_options`` (options of ``ibr.build_mesh``) as a new dict (None -> {}), or a
-    TypeError naming it."""
+    """``mesh_options`` (options of ``ibr.build_mesh``, :data:`MESH_OPTIONS`) as a new dict
+    (None -> {}), or a TypeError / ValueError naming it (an unknown key with the nearest valid
+    name: a misspelt key reached build_mesh as "unexpected keyword argument")."""
     if mesh_options is None:
         return {}
     if not isinstance(mesh_options, dict):
         raise TypeError(f"mesh_options: expected a dict of ibr.build_mesh options, got {type(mesh_options).__name__}")
+    check_keys("mesh_options", mesh_options, MESH_OPTIONS)
     return dict(mesh_options)
 
 

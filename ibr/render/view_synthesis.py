@@ -516,7 +516,8 @@ def iter_interpolate(
     supersample: int = 1,
 ) -> Iterator[Rendering]:
     """Generator form of :func:`interpolate`: yields one :class:`Rendering` per target, in order
-    (the previous-frame fill uses the frame yielded before)."""
+    (the previous-frame fill uses the frame yielded before). Every argument is checked when it is
+    called, before the first frame is asked for."""
     check_choice("method", method, METHODS)
     check_choice("composite_mode", composite_mode, COMPOSITE_MODES)
     check_choice("fill", fill, FILLS)
@@ -548,6 +549,14 @@ def iter_interpolate(
     base = check_mesh_options(mesh_options)
     # level of detail from the span of the whole call (one mesh per source for every frame)
     opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
+    return _frames(view_a, view_b, cams, ts, k, opts, method=method, footprint=footprint, splat=splat,
+                   interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
+                   silhouettes=silhouettes, fill=fill)
+
+
+def _frames(view_a, view_b, cams, ts, k, opts, *, method, footprint, splat, interpolation, composite_mode,
+            depth_tol, silhouettes, fill) -> Iterator[Rendering]:
+    """The frames of :func:`iter_interpolate` (its arguments checked)."""
     previous = None  # the previous frame as rendered (supersampled when k > 1), for fill="previous"
     for cam, tv in zip(cams, ts):
         w = viewpoint_weights(cam, [view_a.camera, view_b.camera])

@@ -142,17 +142,9 @@ def stitch_rgbd(views, camera, *, mesh_options: dict | None = None, progress=Non
     if not isinstance(camera, (SphericalCamera, Camera)):
         raise TypeError(f"camera: expected a SphericalCamera, a Camera or an int width, got {type(camera).__name__}")
     _check_keywords("blend_options", blend_options, blend_sources, skip=("progress",))
-    return _render(views, camera, _mesh_options(mesh_options), blend_options, progress)
+    return _render(views, camera, check_mesh_options(mesh_options), blend_options, progress)
 
 
-def _mesh_options(mesh_options) -> dict:
-    """``mesh_options`` checked: a dict of :func:`ibr.build_mesh` keywords (a typo is named with the
-    nearest valid one instead of build_mesh's "unexpected keyword argument")."""
-    from ibr.mesh import build_mesh
-
-    opts = check_mesh_options(mesh_options)
-    _check_keywords("mesh_options", opts, build_mesh)
-    return opts
 
 
 def _check_keywords(name: str, options: dict, function, skip=()) -> None:
