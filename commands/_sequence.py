@@ -123,7 +123,9 @@ def add_interpolate_arguments(parser) -> None:
     g.add_argument("--no-tail", action="store_true",
                    help="end on the last view ((N-1)F+1 frames) instead of extrapolating F-1 frames after it (N F)")
     g.add_argument("--truth", metavar="SEQ",
-                   help="ground-truth sequence of the output frames (default: the manifest's ground_truth)")
+                   help="ground-truth sequence of the output frames (default: the manifest's ground_truth); "
+                        "for a pair A B: a view file or a sequence whose views are matched to the frames by "
+                        "camera")
     g.add_argument("--report", metavar="REPORT.json",
                    help="write per-frame timing, holes, PSNR and the flicker figures as JSON")
 

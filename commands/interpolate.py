@@ -208,9 +208,34 @@ def first_run_kernels(args):
     return FRAME_KERNELS, "frame"
 
 
+def _truth_for_pair(truth, path_a, path_b, ts) -> dict:
+    """{t: ground-truth view file} for a pair's frames: the views of ``--truth`` (a view file or a
+    sequence) whose camera is a frame's (A's and B's cameras interpolated at t, within 1e-6)."""
+    from pathlib import Path
+
+    from ibr.base.camera import interpolate_cameras
+    from ibr.io import load_camera
+    from ibr.sequence import is_sequence, load_sequence
+
+    paths = list(load_sequence(truth).views) if is_sequence(truth) else [Path(truth)]
+    cams = [(p, load_camera(p, what="--truth view")) for p in paths]
+    ca, cb = load_camera(path_a, what="A"), load_camera(path_b, what="B")
+    found = {}
+    for t in ts:
+        frame = interpolate_cameras(ca, cb, t)
+        hit = next((p for p, c in cams if c.allclose(frame, atol=1e-6)), None)
+        if hit is not None:
+            found[t] = hit
+    if not found:
+        raise ValueError(f"--truth: no view of {truth} has the camera of a frame (t = "
+                         f"{', '.join(f'{t:g}' for t in ts)}); ground truth is matched to the frames by camera")
+    return found
+
+
 def _check_pair(path_a, view_a, path_b, view_b) -> None:
     """The library's source checks, naming the positionals A / B (not ``view_a`` / ``view_b``):
-    both views hold depth and have one size."""
+    both views hold depth and have one size; colours of two types (8- and 16-bit) are both made
+    float 0-1. Returns the two views."""
     for name, path, view in (("A", path_a, view_a), ("B", path_b, view_b)):
         if view.depth is None:
             raise ValueError(f"{name}: {path} has no depth, so it cannot be a source (a view without depth can "
@@ -218,6 +243,21 @@ def _check_pair(path_a, view_a, path_b, view_b) -> None:
     if view_a.shape != view_b.shape:
         raise ValueError(f"B: {path_b} is {view_b.camera.width}x{view_b.camera.height}, A ({path_a}) is "
                          f"{view_a.camera.width}x{view_a.camera.height}; both sources must have the same size")
+    if view_a.color.dtype != view_b.color.dtype or view_a.color.shape != view_b.color.shape:
+        # the library asks for one colour type; a CLI user has no way to convert: float [0, 1] RGB(A)
+        from ibr.base.view import View
+        from ibr.sequence.metrics import as_unit_float
+
+        from commands._common import info
+
+        ca, cb = as_unit_float(view_a.color, "A: color"), as_unit_float(view_b.color, "B: color")
+        if ca.shape != cb.shape:
+            raise ValueError(f"B: {path_b} has {cb.shape[2]} colour channel(s), A ({path_a}) {ca.shape[2]}; "
+                             "both sources must have the same channels")
+        info(f"interpolate: A's colour is {view_a.color.dtype}, B's {view_b.color.dtype}: both used as float 0-1")
+        view_a = View(ca, view_a.depth, view_a.camera, view_a.name)
+        view_b = View(cb, view_b.depth, view_b.camera, view_b.name)
+    return view_a, view_b
 
 
 def run(args) -> int:
@@ -245,7 +285,7 @@ def run(args) -> int:
         raise ValueError(f"views: expected two view files A.json B.json (or none), got {len(args.views)}")
     # the sequence options would be silently ignored for a pair (or the bundled pair)
     for opt, given in (("--factor", args.factor is not None), ("--no-tail", args.no_tail),
-                       ("--truth", args.truth is not None), ("--report", args.report is not None)):
+                       ("--report", args.report is not None)):
         if given:
             raise ValueError(f"{opt}: only used with a sequence (one manifest or folder of numbered views), "
                              "not with two view files; use --frames or --t for a pair")
@@ -259,6 +299,8 @@ def run(args) -> int:
     for t in ts:
         if not np.isfinite(t):
             raise ValueError(f"--t: expected finite numbers, got {t}")
+    if args.truth is not None:  # a pair's own ground truth (the bundled pair has its manifest's)
+        truth_paths = _truth_for_pair(args.truth, path_a, path_b, ts)
     fps = 24.0 if args.fps is None else args.fps
     if not (isinstance(fps, (int, float)) and np.isfinite(fps) and fps > 0):
         raise ValueError(f"--fps: expected a positive frame rate, got {fps}")
@@ -275,8 +317,7 @@ def run(args) -> int:
         # imported after cli.main started the first-run helper: numba's import (0.3 s) overlaps it
         from ibr.render.view_synthesis import iter_interpolate, source_mesh
 
-        view_a, view_b = load_view(path_a), load_view(path_b)
-        _check_pair(path_a, view_a, path_b, view_b)
+        view_a, view_b = _check_pair(path_a, load_view(path_a), path_b, load_view(path_b))
         # the inputs read: say that numba compiles (not before a view without depth is refused)
         modules, warm = first_run_kernels(args)
         with_depth = view_a.depth is not None and view_b.depth is not None

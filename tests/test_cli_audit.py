@@ -165,3 +165,32 @@ def test_an_opencv_error_is_a_one_line_message(tmp_path, capsys, monkeypatch):
     line = _error_line(capsys, "stitch-photos")
     assert line == "ibr stitch-photos: error: OpenCV assertion failed: !ssize.empty() in function 'resize'"
     assert not out.exists()
+
+
+def test_interpolate_pair_scores_its_truth_by_camera_and_mixes_colour_types(tmp_path, capsys):
+    """A pair could not be scored ("--truth: only used with a sequence"); an 8-bit and a 16-bit
+    view were refused after both meshes were built ("convert both to one dtype": no way to in the
+    CLI). --truth views are matched to the frames by camera; mixed colour types become float 0-1."""
+    import shutil
+
+    import numpy as np
+
+    import ibr
+    from samples import DATA_DIR
+
+    for name in ("clutter_b", "clutter_t050"):
+        for f in DATA_DIR.glob(f"{name}*"):
+            shutil.copy(f, tmp_path / f.name)
+    a = ibr.load_view(DATA_DIR / "clutter_a.json")
+    ibr.save_view(ibr.View(a.color.astype(np.uint16) * 257, a.depth, a.camera, "a16"), tmp_path / "a16.json")
+    args = [str(tmp_path / "a16.json"), str(tmp_path / "clutter_b.json"), "--t", "0.25", "0.5", "0.6"]
+    assert cli.main(["interpolate", *args, "--truth", str(tmp_path / "clutter_t050.json"), "--out",
+                     str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert "A's colour is uint16, B's uint8: both used as float 0-1" in err
+    assert err.count("vs clutter_t050.json") == 1 and "over 1 frames" in err  # t = 0.5 only
+    psnr = float(err.split("mean PSNR ")[1].split(" dB")[0])
+    assert psnr > 35.0  # the bundled pair scores 36.6 dB at t = 0.5
+    assert cli.main(["interpolate", *args[:2], "--t", "0.4", "--truth", str(tmp_path / "clutter_t050.json"),
+                     "--out", str(tmp_path / "o2")]) == 1
+    assert "--truth: no view of" in capsys.readouterr().err and not (tmp_path / "o2").exists()
