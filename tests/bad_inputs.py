@@ -417,7 +417,7 @@ _add("stereo on depth 1e30", C, "error", r"nan.json|far.json: depth: valid value
      argv=("stereo", "{d}/far.json", "-o", "{d}/s.png"), issue=True)
 _add("warp on depth 1e-30", C, "error", r"near.json: depth: valid values must lie in", argv=("warp", "{d}/near.json", "--to",
      "{d}/b.json", "-o", "{d}/o.png"), issue=True)
-_add("warp on all-NaN depth", C, "error", r"view 'nan': the depth has no valid pixel \(all NaN\), so it cannot be a source", argv=("warp", "{d}/nan.json", "--to", "{d}/b.json", "-o",
+_add("warp on all-NaN depth", C, "error", r"view 'nan': the depth has no valid pixel \(NaN, zero, negative or infinite everywhere\), so it cannot be a source", argv=("warp", "{d}/nan.json", "--to", "{d}/b.json", "-o",
      "{d}/o.png"))
 _add("warp --method unknown", U, "usage", r"argument --method: invalid choice", argv=("warp", "{d}/a.json", "--to", "{d}/b.json",
      "-o", "{d}/o.png", "--method", "magic"))
@@ -633,7 +633,7 @@ _lib("save_view into a missing folder", "error", r"path: output folder .* does n
      (FileNotFoundError,))
 _lib("save_view colour and depth on one name", "error", r"must be distinct", lambda d: _save(d, color_name="x.exr",
      depth_name="x.exr"))
-_lib("stereo_pair on all-NaN depth (as the CLI)", "error", r"view 'a': the depth has no valid pixel \(all NaN\); a stereo pair",
+_lib("stereo_pair on all-NaN depth (as the CLI)", "error", r"view 'a': the depth has no valid pixel \(NaN, zero, negative or infinite everywhere\); a stereo pair",
      lambda d: _stereo(d, depth=np.full((H, W), np.nan)), issue=True)
 _lib("stereo_pair e negative", "error", r"e: expected an interaxial >= 0", lambda d: _stereo(d, e=-1))
 _lib("stereo_pair e absurd", "error", r"e: the zero-parallax shift", lambda d: _stereo(d, e=1e9))

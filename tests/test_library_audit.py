@@ -313,3 +313,22 @@ def test_iter_interpolate_is_top_level_and_checks_before_the_first_frame():
     assert MESH_OPTIONS == tuple(k for k in inspect.signature(build_mesh).parameters if k != "view")
     with pytest.raises(ValueError, match=r"mesh_options: unknown key 'max_eror_px' \(did you mean 'max_error_px'\?\)"):
         ibr.interpolate(a, b, 0.5, mesh_options={"max_eror_px": 0.1})
+
+
+def test_messages_name_what_was_wrong():
+    """All-zero depth was reported as "(all NaN)"; save_view's unknown depth_encoding blamed
+    depth_params; a 179.9-degree target that squeezes the scene under a pixel was asked whether
+    it looked away."""
+    import ibr
+    from ibr.base.view import View
+    from samples import DATA_DIR
+
+    a, b = ibr.load_view(DATA_DIR / "clutter_a.json"), ibr.load_view(DATA_DIR / "clutter_b.json")
+    zero = View(a.color, np.zeros_like(a.depth), a.camera, "zero")
+    with pytest.raises(ValueError, match=r"no valid pixel \(NaN, zero, negative or infinite everywhere\)"):
+        ibr.warp(zero, b.camera)
+    with pytest.raises(ValueError, match=r"^depth_encoding: unknown depth encoding 'zz' \(did you mean 'z'\?\)"):
+        ibr.save_view(a, "unused.json", depth_encoding="zz")
+    wide = Camera.from_fov(512, 384, hfov_deg=179.9, world_from_cam=b.camera.world_from_cam)
+    with pytest.raises(ValueError, match="or so wide .* that they fall between its pixel centres"):
+        ibr.warp(a, wide)

@@ -100,10 +100,13 @@ def _param(params: dict, key: str, where: str, *, allow_inf: bool = False) -> fl
     return float(value)
 
 
-def _check_depth_params(encoding, params: dict, where: str) -> dict:
+def _check_depth_params(encoding, params: dict, where: str, encoding_where: str | None = None) -> dict:
+    """``params`` of depth ``encoding`` checked; errors name ``where`` (``encoding_where`` for an
+    unknown encoding, when it is another argument: save_view's ``depth_encoding``)."""
     if not isinstance(encoding, str) or encoding not in DEPTH_ENCODINGS:
         near = nearest_name(encoding, DEPTH_ENCODINGS)
-        raise ValueError(f"{where}: unknown depth encoding {encoding!r}{f' (did you mean {near!r}?)' if near else ''}; "
+        raise ValueError(f"{encoding_where or where}: unknown depth encoding {encoding!r}"
+                         f"{f' (did you mean {near!r}?)' if near else ''}; "
                          f"expected one of {', '.join(map(repr, DEPTH_ENCODINGS))}")
     required, optional = DEPTH_ENCODINGS[encoding]
     unknown = sorted(set(params) - set(required) - set(optional), key=str)
@@ -442,7 +445,7 @@ def save_view(view: View, path, *, color_name: str | None = None, depth_name: st
     folder = path.parent
     if not folder.is_dir():
         raise FileNotFoundError(f"path: output folder {folder} does not exist")
-    params = _check_depth_params(depth_encoding, dict(depth_params or {}), "depth_params")
+    params = _check_depth_params(depth_encoding, dict(depth_params or {}), "depth_params", "depth_encoding")
     stem = path.stem
     color_name = color_name or f"{stem}_color{_default_color_ext(view.color.dtype)}"
     check_relative_path("color_name", color_name)  # never write outside the JSON's folder (#12)

@@ -269,8 +269,8 @@ def _check_source(view, name: str, method: str = "mesh") -> None:
     if src.any_valid is None:  # once per view
         src.any_valid = bool(np.isfinite(view.depth).any())
     if not src.any_valid:
-        raise ValueError(f"{name}: view {view.name!r}: the depth has no valid pixel (all NaN), so it cannot be a "
-                         "source")
+        raise ValueError(f"{name}: view {view.name!r}: the depth has no valid pixel (NaN, zero, negative or infinite "
+                         "everywhere), so it cannot be a source")
 
 
 def _source_maps(views, camera: Camera, method: str, footprint: str, splat: str, mesh_options) -> list:
@@ -392,7 +392,8 @@ def _nothing_seen(camera: Camera, names, t) -> ValueError:
     where = f"target camera at t={t:g}" if t is not None else "target camera"
     return ValueError(
         f"{where} sees nothing of source view(s) {', '.join(map(repr, names))}: no surface of theirs "
-        f"projects in front of it ({camera!r}); is it looking away or placed behind them?"
+        f"covers a pixel centre of it ({camera!r}); is it looking away, placed behind them, or so wide "
+        f"(a field of view near 180 degrees) that they fall between its pixel centres?"
     )
 
 

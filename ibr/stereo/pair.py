@@ -225,7 +225,7 @@ def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, me
 
 def no_valid_depth_message(view: View) -> str:
     """The error for a view whose depth has no valid pixel (library and CLI say the same)."""
-    return f"view {view.name!r}: the depth has no valid pixel (all NaN); a stereo pair needs depth"
+    return f"view {view.name!r}: the depth has no valid pixel (NaN, zero, negative or infinite everywhere); a stereo pair needs depth"
 
 
 def check_stereo_supersample(supersample, method: str) -> int:
