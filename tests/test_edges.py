@@ -627,3 +627,26 @@ def test_the_gap_behind_a_one_pixel_pole_is_no_crack(axis):
     wall = r.depth > 4
     err = np.abs(r.color.astype(int) - np.array([200, 0, 129])).max(-1)
     assert wall.sum() > 0.8 * h * w and err[wall].max() <= 30
+
+
+def test_a_region_out_of_the_sources_view_is_filled_smoothly_not_with_bands():
+    """A target seeing far past the source's edges (120 degrees from b's pose: 45 % of the frame
+    is more than 96 px from any covered pixel) was filled with the directional copies' long
+    horizontal and vertical bands (mean |difference| of neighbouring pixels there 0.39 / 0.16
+    levels); beyond DIRECT_FADE_PX the pull-push alone fills, smooth (0.004)."""
+    import cv2
+
+    import ibr
+    from ibr.render.fill import DIRECT_FADE_PX
+    from samples import DATA_DIR
+
+    a, b = ibr.load_view(DATA_DIR / "clutter_a.json"), ibr.load_view(DATA_DIR / "clutter_b.json")
+    cam = Camera.from_fov(512, 384, hfov_deg=120, world_from_cam=b.camera.world_from_cam)
+    out = ibr.warp(a, cam)
+    dist = cv2.distanceTransform(out.holes.astype(np.uint8), cv2.DIST_L2, 5)
+    far = dist > DIRECT_FADE_PX[1]
+    assert far.mean() > 0.3
+    c = out.color.astype(float)
+    across_cols = np.abs(np.diff(c, axis=1)).mean(-1)[far[:, 1:] & far[:, :-1]].mean()
+    across_rows = np.abs(np.diff(c, axis=0)).mean(-1)[far[1:] & far[:-1]].mean()
+    assert across_cols < 0.05 and across_rows < 0.05

@@ -58,6 +58,9 @@ PULLPUSH_MIX = 0.5
 #: room and grazing unchanged. Checking every run cost the motorcycle 0.35 dB.
 DIRECT_MIN_DEPTH = 0.9
 DIRECT_CHECK_RUN = 8
+#: Hole pixels far from every covered pixel (a region out of the sources' view) fade from the mix
+#: to the pull-push alone between these distances (px): the copies drew long bands there.
+DIRECT_FADE_PX = (32.0, 96.0)
 #: Binomial [1 8 28 56 70 56 28 8 1] / 256 (sigma sqrt(2) px): the directional half of the
 #: pull-push fill is smoothed with it across the parallax axis.
 _ACROSS = np.array([1, 8, 28, 56, 70, 56, 28, 8, 1], np.float32) / np.float32(256)
@@ -313,9 +316,31 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         sm = np.empty_like(val)
         _k.binomial3(val, need[1], sm)
         val = sm
+    fade = _far_from_covered(holes) if mix > 0 else None
+    if fade is not None:  # the pull-push alone, blended in below
+        smooth_color, smooth_depth, unused = color.copy(), depth.copy(), np.zeros_like(filled)
+        _k.pp_write0(smooth_color, smooth_depth, holes, val, 0.0, direct, direct_ok, direct_z,
+                     np.float32(DIRECT_MIN_DEPTH), color.dtype.kind in "ui", unused)
     _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, direct_z, np.float32(DIRECT_MIN_DEPTH),
                  color.dtype.kind in "ui", filled)
+    if fade is not None:
+        far = fade > 0
+        f = fade[far][:, None]
+        blend = (1.0 - f) * color[far].astype(np.float32) + f * smooth_color[far].astype(np.float32)
+        color[far] = np.rint(blend) if color.dtype.kind in "ui" else blend
     return filled
+
+
+def _far_from_covered(holes):
+    """(H, W) float32 share of the pull-push alone: 0 within DIRECT_FADE_PX[0] of a covered pixel,
+    1 beyond DIRECT_FADE_PX[1]; None when no hole pixel is that far."""
+    import cv2
+
+    dist = cv2.distanceTransform(holes.view(np.uint8), cv2.DIST_L2, 5)
+    a, b = DIRECT_FADE_PX
+    if not (dist > a).any():
+        return None
+    return np.clip((dist - a) / (b - a), 0.0, 1.0)
 
 
 def _directional_fill(color, depth, holes, axis, mix):
