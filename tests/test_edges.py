@@ -630,10 +630,10 @@ def test_the_gap_behind_a_one_pixel_pole_is_no_crack(axis):
 
 
 def test_a_region_out_of_the_sources_view_is_filled_smoothly_not_with_bands():
-    """A target seeing far past the source's edges (120 degrees from b's pose: 45 % of the frame
-    is more than 96 px from any covered pixel) was filled with the directional copies' long
-    horizontal and vertical bands (mean |difference| of neighbouring pixels there 0.39 / 0.16
-    levels); beyond DIRECT_FADE_PX the pull-push alone fills, smooth (0.004)."""
+    """A target seeing far past the source's edges (120 degrees from b's pose: 9 % of the frame is
+    more than 160 px from any covered pixel) was filled with the directional copies' long
+    horizontal and vertical bands; beyond DIRECT_FADE_PX the pull-push alone fills, smooth (mean
+    |difference| of neighbouring pixels there 0.001 / 0.004 levels)."""
     import cv2
 
     import ibr
@@ -645,7 +645,7 @@ def test_a_region_out_of_the_sources_view_is_filled_smoothly_not_with_bands():
     out = ibr.warp(a, cam)
     dist = cv2.distanceTransform(out.holes.astype(np.uint8), cv2.DIST_L2, 5)
     far = dist > DIRECT_FADE_PX[1]
-    assert far.mean() > 0.3
+    assert far.mean() > 0.05
     c = out.color.astype(float)
     across_cols = np.abs(np.diff(c, axis=1)).mean(-1)[far[:, 1:] & far[:, :-1]].mean()
     across_rows = np.abs(np.diff(c, axis=0)).mean(-1)[far[1:] & far[:-1]].mean()

@@ -60,7 +60,7 @@ DIRECT_MIN_DEPTH = 0.9
 DIRECT_CHECK_RUN = 8
 #: Hole pixels far from every covered pixel (a region out of the sources' view) fade from the mix
 #: to the pull-push alone between these distances (px): the copies drew long bands there.
-DIRECT_FADE_PX = (32.0, 96.0)
+DIRECT_FADE_PX = (64.0, 160.0)
 #: Binomial [1 8 28 56 70 56 28 8 1] / 256 (sigma sqrt(2) px): the directional half of the
 #: pull-push fill is smoothed with it across the parallax axis.
 _ACROSS = np.array([1, 8, 28, 56, 70, 56, 28, 8, 1], np.float32) / np.float32(256)
@@ -333,11 +333,18 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
 
 def _far_from_covered(holes):
     """(H, W) float32 share of the pull-push alone: 0 within DIRECT_FADE_PX[0] of a covered pixel,
-    1 beyond DIRECT_FADE_PX[1]; None when no hole pixel is that far."""
+    1 beyond DIRECT_FADE_PX[1]; None when no hole pixel is that far. A pixel that far has an
+    all-hole disc of that radius around it, so an all-hole block of the grid of side
+    (a sqrt(2) + 1) / 2: without one (the motorcycle's disocclusions) the distance transform
+    (0.5 ms there) is skipped."""
     import cv2
 
-    dist = cv2.distanceTransform(holes.view(np.uint8), cv2.DIST_L2, 5)
     a, b = DIRECT_FADE_PX
+    g = int((a * np.sqrt(2.0) + 1.0) // 2)
+    hh, ww = (holes.shape[0] // g) * g, (holes.shape[1] // g) * g
+    if hh == 0 or ww == 0 or not holes[:hh, :ww].reshape(hh // g, g, ww // g, g).all(axis=(1, 3)).any():
+        return None
+    dist = cv2.distanceTransform(holes.view(np.uint8), cv2.DIST_L2, 5)
     if not (dist > a).any():
         return None
     return np.clip((dist - a) / (b - a), 0.0, 1.0)
