@@ -34,6 +34,13 @@ class View:
         Camera whose image size equals the color's.
     name : str
         Short label used in messages and file names.
+
+    Notes
+    -----
+    The renderers cache what they derive from a view (its mesh, its colour layers) on the View
+    object, so treat its arrays as read-only once it has been rendered: after editing colour or
+    depth in place, make a new View (``View(color, depth, camera)``), or the old mesh and colours
+    are used. Colour is kept as given (no copy; big-endian data is made native), depth as float32.
     """
 
     color: np.ndarray
