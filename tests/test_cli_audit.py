@@ -20,10 +20,10 @@ def _error_line(capsys, command):
     return lines[0]
 
 
-@pytest.mark.parametrize("extra", [["--report", "r.json"], ["--factor", "3"], ["--no-tail"],
-                                   ["--truth", str(DATA / "room_t050.json")]])
+@pytest.mark.parametrize("extra", [["--report", "r.json"], ["--factor", "3"], ["--no-tail"]])
 def test_interpolate_pair_refuses_sequence_options(tmp_path, capsys, extra):
-    """A pair used to ignore --report/--factor/--no-tail/--truth silently (exit 0, no report)."""
+    """A pair used to ignore --report/--factor/--no-tail silently (exit 0, no report); --truth is a
+    pair's option too now (views matched to the frames by camera)."""
     extra = [str(tmp_path / e) if e == "r.json" else e for e in extra]
     out = tmp_path / "frames"
     code = cli.main(["interpolate", str(DATA / "room_a.json"), str(DATA / "room_b.json"), "--t", "0.5",
