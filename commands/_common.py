@@ -127,9 +127,9 @@ def image_for(path, img, what: str = "-o"):
     any advertised extension: float [0, 1] becomes uint8 for .png / .jpg (clipped, rounded; an
     HDR colour's highlights clip), uint16 becomes uint8 for .jpg (which also drops an alpha
     channel), uint8 / uint16 become float32 [0, 1] for .exr / .pfm (float64: float32 there and for
-    .tif); anything else is returned as is. A one-channel float image with values outside
-    [0, 1] (a depth or range map) is refused for .png / .jpg, naming ``what``: clipped it would
-    be all white."""
+    .tif); anything else is returned as is. A one-channel float depth or range map (median
+    above 1, or values below 0: :func:`ibr.io.images.check_unit_colour`) is refused for .png /
+    .jpg, naming ``what``: clipped it would be all white."""
     import numpy as np
 
     ext = Path(path).suffix.lower()

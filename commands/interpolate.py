@@ -217,7 +217,10 @@ def _truth_for_pair(truth, path_a, path_b, ts) -> dict:
     from ibr.io import load_camera
     from ibr.sequence import is_sequence, load_sequence
 
-    paths = list(load_sequence(truth).views) if is_sequence(truth) else [Path(truth)]
+    try:
+        paths = list(load_sequence(truth).views) if is_sequence(truth) else [Path(truth)]
+    except (OSError, ValueError) as exc:
+        raise type(exc)(f"--truth: {exc}") from None
     cams = [(p, load_camera(p, what="--truth view")) for p in paths]
     ca, cb = load_camera(path_a, what="A"), load_camera(path_b, what="B")
     found = {}
@@ -232,7 +235,18 @@ def _truth_for_pair(truth, path_a, path_b, ts) -> dict:
     return found
 
 
-def _check_pair(path_a, view_a, path_b, view_b) -> None:
+def _comparable(color, truth, path):
+    """A frame and its ground truth with the same channels: an alpha channel of either is dropped
+    (RGB against RGBA); otherwise the counts must agree (an error naming ``path``)."""
+    c = [1 if x.ndim == 2 else x.shape[2] for x in (color, truth)]
+    if c[0] != c[1] and min(c) == 3:
+        return color[..., :3], truth[..., :3]
+    if c[0] != c[1]:
+        raise ValueError(f"--truth: {path} has {c[1]} colour channel(s), the frames {c[0]}")
+    return color, truth
+
+
+def _check_pair(path_a, view_a, path_b, view_b):
     """The library's source checks, naming the positionals A / B (not ``view_a`` / ``view_b``):
     both views hold depth and have one size; colours of two types (8- and 16-bit) are both made
     float 0-1. Returns the two views."""
@@ -243,17 +257,18 @@ def _check_pair(path_a, view_a, path_b, view_b) -> None:
     if view_a.shape != view_b.shape:
         raise ValueError(f"B: {path_b} is {view_b.camera.width}x{view_b.camera.height}, A ({path_a}) is "
                          f"{view_a.camera.width}x{view_a.camera.height}; both sources must have the same size")
-    if view_a.color.dtype != view_b.color.dtype or view_a.color.shape != view_b.color.shape:
-        # the library asks for one colour type; a CLI user has no way to convert: float [0, 1] RGB(A)
+    channels = [1 if v.color.ndim == 2 else v.color.shape[2] for v in (view_a, view_b)]
+    if channels[0] != channels[1]:
+        raise ValueError(f"B: {path_b} has {channels[1]} colour channel(s), A ({path_a}) {channels[0]}; "
+                         "both sources must have the same channels")
+    if view_a.color.dtype != view_b.color.dtype:
+        # the library asks for one colour type; a CLI user has no way to convert: float [0, 1]
         from ibr.base.view import View
         from ibr.sequence.metrics import as_unit_float
 
         from commands._common import info
 
         ca, cb = as_unit_float(view_a.color, "A: color"), as_unit_float(view_b.color, "B: color")
-        if ca.shape != cb.shape:
-            raise ValueError(f"B: {path_b} has {cb.shape[2]} colour channel(s), A ({path_a}) {ca.shape[2]}; "
-                             "both sources must have the same channels")
         info(f"interpolate: A's colour is {view_a.color.dtype}, B's {view_b.color.dtype}: both used as float 0-1")
         view_a = View(ca, view_a.depth, view_a.camera, view_a.name)
         view_b = View(cb, view_b.depth, view_b.camera, view_b.name)
@@ -351,8 +366,7 @@ def run(args) -> int:
                     f"(filled {frame.filled.mean():.3%})")
             truth = next((p for tt, p in truth_paths.items() if abs(tt - t) < 1e-9), None)
             if truth is not None:
-                gt = load_view(truth).color
-                psnr, ssim = _metrics(frame.color, gt)
+                psnr, ssim = _metrics(*_comparable(frame.color, load_view(truth).color, truth))
                 scores.append((psnr, ssim))
                 line += f", PSNR {psnr:.2f} dB, SSIM {ssim:.4f} vs {truth.name}"
             if not long_run:

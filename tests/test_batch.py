@@ -428,3 +428,12 @@ def test_inputs_and_none_values_of_output_options_are_not_outputs(tmp_path):
         canvas, stitch, both = load_jobs(path, parser=parser) if parser else load_jobs(path)
         assert canvas.outputs == ("frames",) and stitch.outputs == ("p.png",)
         assert both.outputs == ("q.png", "q_depth.exr")
+
+
+def test_a_folder_named_none_is_still_an_output():
+    """'none' names no file only for stitch's --depth-out; interpolate --out none is a folder."""
+    from cli import build_parser
+    from ibr.sequence.jobs import _job_from
+
+    job = _job_from({"command": "interpolate a.json b.json --out none"}, 0, Path("."), build_parser())
+    assert job.outputs == ("none",)

@@ -424,3 +424,9 @@ def test_a_screen_stroke_is_clipped_to_the_screen_and_split_where_it_leaves_it(m
     assert len(parts) == 2 and all(np.ptp(p[:, 0]) < 1e-6 for p in parts)  # two vertical pieces
     (dot,) = stroke_from_screen(cam, [[100, 50]], c)
     assert dot.shape == (1, 2)
+
+
+def test_an_empty_screen_stroke_draws_nothing():
+    cam = Camera.from_fov(200, 100, hfov_deg=60)
+    c = Canvas((0, 0, 2), (0, 0, -1), (1.0, 0.5), resolution=(100, 50))
+    assert stroke_from_screen(cam, np.empty((0, 2)), c) == []

@@ -194,3 +194,25 @@ def test_interpolate_pair_scores_its_truth_by_camera_and_mixes_colour_types(tmp_
     assert cli.main(["interpolate", *args[:2], "--t", "0.4", "--truth", str(tmp_path / "clutter_t050.json"),
                      "--out", str(tmp_path / "o2")]) == 1
     assert "--truth: no view of" in capsys.readouterr().err and not (tmp_path / "o2").exists()
+
+
+def test_interpolate_pair_truth_with_alpha_and_a_missing_truth_folder(tmp_path, capsys):
+    """An RGBA ground truth failed after rendering with "color: shape ... differs from the
+    truth's" (library words); a --truth folder without views did not name --truth."""
+    import shutil
+
+    import numpy as np
+
+    import ibr
+    from samples import DATA_DIR
+
+    t = ibr.load_view(DATA_DIR / "clutter_t050.json")
+    rgba = np.concatenate([t.color, np.full(t.color.shape[:2] + (1,), 255, np.uint8)], axis=2)
+    ibr.save_view(ibr.View(rgba, t.depth, t.camera, "t4"), tmp_path / "t4.json")
+    pair = [str(DATA_DIR / "clutter_a.json"), str(DATA_DIR / "clutter_b.json"), "--t", "0.5"]
+    assert cli.main(["interpolate", *pair, "--truth", str(tmp_path / "t4.json"), "--out", str(tmp_path / "o")]) == 0
+    assert "vs t4.json" in capsys.readouterr().err
+    (tmp_path / "empty").mkdir()
+    assert cli.main(["interpolate", *pair, "--truth", str(tmp_path / "empty"), "--out", str(tmp_path / "o2")]) == 1
+    assert "error: --truth: " in capsys.readouterr().err
+    shutil.rmtree(tmp_path / "o")

@@ -650,3 +650,17 @@ def test_a_region_out_of_the_sources_view_is_filled_smoothly_not_with_bands():
     across_cols = np.abs(np.diff(c, axis=1)).mean(-1)[far[:, 1:] & far[:, :-1]].mean()
     across_rows = np.abs(np.diff(c, axis=0)).mean(-1)[far[1:] & far[:-1]].mean()
     assert across_cols < 0.05 and across_rows < 0.05
+
+
+def test_the_far_field_test_sees_bands_along_the_right_and_bottom_edges():
+    """The all-hole block test cut the image to whole blocks: a far band along the right or bottom
+    edge (or an image narrower than a block) was never tested and kept its bands."""
+    from ibr.render.fill import _far_from_covered
+
+    right = np.zeros((300, 180), bool)
+    right[:, 46:] = True  # a 134-px band: 134 px from the covered part at the image's edge
+    narrow = np.ones((40, 1000), bool)
+    narrow[:, 0] = False  # one covered column: 999 px away at the far end
+    for holes in (right, right.T, narrow, right[:, ::-1], right.T[::-1]):
+        fade = _far_from_covered(np.ascontiguousarray(holes))
+        assert fade is not None and fade.max() > 0 and fade[~holes].max() == 0

@@ -382,7 +382,7 @@ def test_a_ground_plane_whose_horizon_runs_along_a_pixel_edge_is_drawn_whole(hfo
     """A level camera of even height has its horizon on a row boundary: the floor's fitted plane
     puts the quad's top corners ~4e8 away, and the bounding box was clipped at 1e-7 of that
     (z = 40), so only one row of the floor was drawn (0.021 of the image instead of 0.5; at 170
-    degrees "sees nothing"). The clip is now relative to the nearest corner in front."""
+    degrees "sees nothing"). The clip is now relative to the corner nearest the target's plane."""
     import ibr
 
     cam = Camera.from_fov(64, 48, hfov_deg=hfov)

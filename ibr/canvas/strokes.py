@@ -164,6 +164,8 @@ def _densify(points, step: float, box):
     segment (its own points flagged as vertices); ``piece`` numbers the stretches that are
     continuous on screen (a segment leaving the screen ends one: a stroke that leaves and comes
     back is two parts, and a segment far off screen costs no samples)."""
+    if not len(points):
+        return np.empty((0, 2)), np.empty(0, bool), np.empty(0, int)
     out, flag, piece = [], [], []
     k, prev_end = 0, None
     segments = zip(points[:-1], points[1:]) if len(points) > 1 else [(points[0], points[0])] * len(points)

@@ -318,8 +318,8 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
         val = sm
     fade = _far_from_covered(holes) if mix > 0 else None
     if fade is not None:  # the pull-push alone, blended in below
-        smooth_color, smooth_depth, unused = color.copy(), depth.copy(), np.zeros_like(filled)
-        _k.pp_write0(smooth_color, smooth_depth, holes, val, 0.0, direct, direct_ok, direct_z,
+        smooth_color, scratch_depth, unused = color.copy(), np.empty_like(depth), np.zeros_like(filled)
+        _k.pp_write0(smooth_color, scratch_depth, holes, val, 0.0, direct, direct_ok, direct_z,
                      np.float32(DIRECT_MIN_DEPTH), color.dtype.kind in "ui", unused)
     _k.pp_write0(color, depth, holes, val, float(mix), direct, direct_ok, direct_z, np.float32(DIRECT_MIN_DEPTH),
                  color.dtype.kind in "ui", filled)
@@ -341,8 +341,11 @@ def _far_from_covered(holes):
 
     a, b = DIRECT_FADE_PX
     g = int((a * np.sqrt(2.0) + 1.0) // 2)
-    hh, ww = (holes.shape[0] // g) * g, (holes.shape[1] // g) * g
-    if hh == 0 or ww == 0 or not holes[:hh, :ww].reshape(hh // g, g, ww // g, g).all(axis=(1, 3)).any():
+    h, w = holes.shape
+    hh, ww = -(-h // g) * g, -(-w // g) * g  # padded with holes to whole blocks (outside counts as far,
+    padded = np.ones((hh, ww), bool)          # as for the distance transform): edge bands are tested too
+    padded[:h, :w] = holes
+    if not padded.reshape(hh // g, g, ww // g, g).all(axis=(1, 3)).any():
         return None
     dist = cv2.distanceTransform(holes.view(np.uint8), cv2.DIST_L2, 5)
     if not (dist > a).any():

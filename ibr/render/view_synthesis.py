@@ -545,9 +545,9 @@ def iter_interpolate(
             f"{view_a.color.dtype} {view_a.color.shape}; convert both to one dtype and layout"
         )
     cams, ts, _ = _targets(view_a, view_b, t)
+    base = check_mesh_options(mesh_options)
     if k > 1:  # the sources at k x k their resolution, sub-pixel silhouettes (ibr.render.upsample)
         view_a, view_b = _source(view_a).upsampled(k), _source(view_b).upsampled(k)
-    base = check_mesh_options(mesh_options)
     # level of detail from the span of the whole call (one mesh per source for every frame)
     opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
     return _frames(view_a, view_b, cams, ts, k, opts, method=method, footprint=footprint, splat=splat,

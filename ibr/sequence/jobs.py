@@ -88,13 +88,13 @@ OUTPUT_OPTIONS = ("-o", "--out", "--output", "--video", "--contact-sheet", "--ob
                   "--depth-out", "--holes-out", "--report", "--coverage", "--cube", "--site")
 #: Of those, the ones a command reads instead (``ibr canvas --video CLIP``: the clip shown on the plane).
 INPUT_OPTIONS = {"canvas": ("--video",)}
-#: Values of an output option that name no file (``--depth-out none``: no depth written).
-NO_OUTPUT = ("none",)
+#: Values of an output option that name no file (``ibr stitch --depth-out none``: no depth written).
+NO_OUTPUT = {("stitch", "--depth-out"): ("none",)}
 
 
 def _is_output(command: str, option: str, value) -> bool:
     return (option in OUTPUT_OPTIONS and option not in INPUT_OPTIONS.get(command, ())
-            and isinstance(value, str) and value not in NO_OUTPUT)
+            and isinstance(value, str) and value not in NO_OUTPUT.get((command, option), ()))
 
 #: Thread-count variables set to ``threads_per_job`` in each job's process (the pool, not the job,
 #: uses the cores): numba, OpenMP/BLAS, OpenCV's parallel_for.

@@ -145,8 +145,6 @@ def stitch_rgbd(views, camera, *, mesh_options: dict | None = None, progress=Non
     return _render(views, camera, check_mesh_options(mesh_options), blend_options, progress)
 
 
-
-
 def _check_keywords(name: str, options: dict, function, skip=()) -> None:
     """Refuse keys of ``options`` that are not keyword-only parameters of ``function`` (besides
     ``skip``), naming the nearest valid one (TypeError, as Python's own message would be)."""
