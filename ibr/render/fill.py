@@ -333,24 +333,35 @@ def _fill_pullpush_inplace(color, depth, holes, *, axis=0, power=PULLPUSH_POWER,
 
 def _far_from_covered(holes):
     """(H, W) float32 share of the pull-push alone: 0 within DIRECT_FADE_PX[0] of a covered pixel,
-    1 beyond DIRECT_FADE_PX[1]; None when no hole pixel is that far. A pixel that far has an
-    all-hole disc of that radius around it, so an all-hole block of the grid of side
-    (a sqrt(2) + 1) / 2: without one (the motorcycle's disocclusions) the distance transform
-    (0.5 ms there) is skipped."""
+    1 beyond DIRECT_FADE_PX[1]; None when no hole pixel is that far (pixels outside the image
+    count as far, as for ``cv2.distanceTransform``). The distance transform (0.5 ms on the
+    motorcycle, whose disocclusions are all nearer) runs only where such a pixel may be:
+    :func:`_may_be_far`."""
     import cv2
 
     a, b = DIRECT_FADE_PX
-    g = int((a * np.sqrt(2.0) + 1.0) // 2)
-    h, w = holes.shape
-    hh, ww = -(-h // g) * g, -(-w // g) * g  # padded with holes to whole blocks (outside counts as far,
-    padded = np.ones((hh, ww), bool)          # as for the distance transform): edge bands are tested too
-    padded[:h, :w] = holes
-    if not padded.reshape(hh // g, g, ww // g, g).all(axis=(1, 3)).any():
+    if not _may_be_far(holes, a):
         return None
     dist = cv2.distanceTransform(holes.view(np.uint8), cv2.DIST_L2, 5)
     if not (dist > a).any():
         return None
     return np.clip((dist - a) / (b - a), 0.0, 1.0)
+
+
+def _may_be_far(holes, a: float, step: int = 4) -> bool:
+    """False only when no hole pixel can be farther than ``a`` from every covered pixel, told on
+    blocks of ``step`` px (0.1 ms on the motorcycle): a pixel's distance is at most the distance
+    between its block and the nearest block holding a covered pixel, plus ``step * sqrt 2``
+    (``2 step`` with the distance transform's rounding)."""
+    import cv2
+
+    # all-hole blocks: the minimum over each block (erosion anchored at its corner; outside the
+    # image counts as hole, the erosion's default border), read at the block corners
+    kernel = np.ones((step, step), np.uint8)
+    empty = np.ascontiguousarray(cv2.erode(holes.view(np.uint8), kernel, anchor=(0, 0))[::step, ::step])
+    if empty.all():
+        return True
+    return float(cv2.distanceTransform(empty, cv2.DIST_L2, 5).max()) * step + 2 * step > a
 
 
 def _directional_fill(color, depth, holes, axis, mix):
