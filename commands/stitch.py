@@ -146,7 +146,7 @@ def _stitch_frame(args, views, panorama, tick):
     if args.fill == "background":
         from panorama.stitch.fill import fill_stitched
 
-        res = fill_stitched(res)
+        res = fill_stitched(res, views)
     packed, depth, holes = res.color, res.depth, res.holes
     if args.layout == "cube":
         s = args.width // 4
