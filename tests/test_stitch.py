@@ -567,3 +567,15 @@ def test_background_rim_samples_beside_holes_are_refilled_not_copied():
     assert score(new) > score(old) + 0.5
     np.testing.assert_array_equal(new.color[~changed], res.color[~changed])
     np.testing.assert_array_equal(new.holes, res.holes)
+
+
+def test_rim_samples_of_a_pinhole_target_are_none():
+    """``rim_samples`` reads spherical targets (range along each ray); a pinhole target has no
+    ``rays_world`` and planar depth: none marked, and ``fill_stitched(res, views)`` still fills."""
+    import ibr
+    from panorama.stitch.fill import fill_stitched, rim_samples
+
+    views = [load_view(p) for p in RIG]
+    res = stitch_rgbd(views, ibr.Camera.from_fov(128, 96, hfov_deg=120))
+    assert res.holes.any() and not rim_samples(res, views).any()
+    np.testing.assert_array_equal(fill_stitched(res, views).color, fill_stitched(res).color)

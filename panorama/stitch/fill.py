@@ -172,15 +172,20 @@ def rim_samples(stitched, views) -> np.ndarray:
     """(H, W) bool: the seen pixels of a stitched panorama that touch a hole (8-neighbours) and
     whose winning source sample (``stitched.winner``, nearest pixel of its projection) lies on
     that source's background rim (:func:`ibr.render.composite.mixed_pixels` ``side="far"``): a
-    silhouette's mixed colour drawn at the background's depth."""
+    silhouette's mixed colour drawn at the background's depth. Spherical targets only (their
+    depth is the range along each ray); none for a pinhole target."""
     import cv2
 
     from ibr.render.composite import mixed_pixels
 
+    from ibr.base.ray_camera import SphericalCamera
+
     holes = stitched.holes
+    rim = np.zeros(holes.shape, bool)
+    if not isinstance(stitched.camera, SphericalCamera):  # a pinhole target: none marked
+        return rim
     ring = cv2.dilate(holes.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool) & ~holes
     ys, xs = np.nonzero(ring)
-    rim = np.zeros(holes.shape, bool)
     if not ys.size:
         return rim
     origin, direction = stitched.camera.rays_world(xs.astype(np.float64), ys.astype(np.float64))
