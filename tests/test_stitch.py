@@ -360,7 +360,7 @@ def test_cli_stitch_mono_and_ods_on_the_bundled_rig(tmp_path, capsys):
 
     beside = cv2.dilate((~seen).astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool) & seen
     differ = (raw != pano).any(-1) & seen
-    assert not (differ & ~beside).any()
+    assert not (differ & ~beside).any() and (differ & beside).any()  # some rim samples refilled
     err = capsys.readouterr().err
     assert "stitch 10/10" in err and "seen" in err
     ods = tmp_path / "ods.png"
@@ -567,6 +567,11 @@ def test_background_rim_samples_beside_holes_are_refilled_not_copied():
     assert score(new) > score(old) + 0.5
     np.testing.assert_array_equal(new.color[~changed], res.color[~changed])
     np.testing.assert_array_equal(new.holes, res.holes)
+    np.testing.assert_array_equal(new.depth[rim], res.depth[rim])  # recoloured; seen, so their depth stays
+    # views of another order hardly agree with the panorama's geometry; too few are refused
+    assert rim_samples(res, views[::-1]).sum() < 0.2 * rim.sum()
+    with pytest.raises(ValueError, match="views: the panorama was stitched from at least 10 views, got 3"):
+        rim_samples(res, views[:3])
 
 
 def test_rim_samples_of_a_pinhole_target_are_none():

@@ -8,12 +8,13 @@ spherical cameras (:mod:`ibr.render.ray_raster`) and N-source blending (:mod:`ib
 stitching that ODS is measured against.
 """
 
-from .fill import fill_panorama, fill_stitched
+from .fill import fill_panorama, fill_stitched, rim_samples
 from .ods import (ODS_LAYOUTS, OdsPair, check_rgbd_panorama, ods_from_panorama, ods_from_views, pack_ods,
                   panorama_views)
 from .rgbd import Stitched, stitch_rgbd, stitch_rgbd_cubemap
-from .rigs import cube_rig, equirect_camera, ods_cameras, ring_rig
+from .rigs import RigFile, cube_rig, equirect_camera, is_rig_file, ods_cameras, read_rig, ring_rig
 
-__all__ = ["ODS_LAYOUTS", "OdsPair", "Stitched", "check_rgbd_panorama", "cube_rig", "equirect_camera", "fill_panorama",
-           "fill_stitched", "ods_cameras", "ods_from_panorama", "ods_from_views", "pack_ods", "panorama_views", "ring_rig", "stitch_rgbd",
-           "stitch_rgbd_cubemap"]
+__all__ = ["check_rgbd_panorama", "cube_rig", "equirect_camera", "fill_panorama", "fill_stitched",
+           "is_rig_file", "ods_cameras", "ods_from_panorama", "ods_from_views", "ODS_LAYOUTS", "OdsPair",
+           "pack_ods", "panorama_views", "read_rig", "RigFile", "rim_samples", "ring_rig", "stitch_rgbd",
+           "stitch_rgbd_cubemap", "Stitched"]

@@ -160,23 +160,40 @@ def fill_stitched(stitched, views=None):
         return stitched
     eye = getattr(stitched.camera, "eye", "mono")
     holes, depth = stitched.holes, stitched.depth
+    rim = None
     if views is not None and eye not in ("left", "right"):
         rim = rim_samples(stitched, views)
+        if (holes | rim).all():  # nothing left to fill from: the rims stay (as in interpolate)
+            rim = None
+    if rim is not None:
         holes, depth = holes | rim, np.where(rim, np.float32(np.nan), depth).astype(np.float32)
     color, depth, _ = fill_panorama(stitched.color, depth, holes,
                                     parallax="rows" if eye in ("left", "right") else "any")
+    if rim is not None:  # recoloured, but seen: their depth stays
+        depth[rim] = stitched.depth[rim]
     return Stitched(color, depth, stitched.holes, stitched.winner, stitched.camera)
 
 
 def rim_samples(stitched, views) -> np.ndarray:
     """(H, W) bool: the seen pixels of a stitched panorama that touch a hole (8-neighbours) and
     whose winning source sample (``stitched.winner``, nearest pixel of its projection) lies on
-    that source's background rim (:func:`ibr.render.composite.mixed_pixels` ``side="far"``): a
-    silhouette's mixed colour drawn at the background's depth. Spherical targets only (their
-    depth is the range along each ray); none for a pinhole target."""
+    that source's background rim (:func:`ibr.render.composite.mixed_pixels` ``side="far"``, with
+    the view's depth quantization): a silhouette's mixed colour drawn at the background's depth.
+    ``views`` are the sources in the order they were stitched; a sample counts only where the
+    source's depth there agrees with the panorama's point (within 3 %), so views of another
+    stitch or order mark (next to) nothing. Spherical targets only (their depth is the range
+    along each ray); none for a pinhole target."""
     import cv2
 
+    from ibr.base.depth import quantization_of
     from ibr.render.composite import mixed_pixels
+
+    from .rgbd import check_views
+
+    views = check_views(views)
+    if stitched.winner.size and int(stitched.winner.max()) >= len(views):
+        raise ValueError(f"views: the panorama was stitched from at least {int(stitched.winner.max()) + 1} views, "
+                         f"got {len(views)}; give the views it was stitched from, in order")
 
     from ibr.base.ray_camera import SphericalCamera
 
@@ -193,11 +210,14 @@ def rim_samples(stitched, views) -> np.ndarray:
     winner = stitched.winner[ys, xs]
     for s, view in enumerate(views):
         sel = np.flatnonzero(winner == s)
-        if not sel.size or view.depth is None:
+        if not sel.size:
             continue
-        uv, _ = view.camera.project(points[sel])
+        uv, z = view.camera.project(points[sel])
         ok = np.isfinite(uv).all(axis=1)
         u = np.clip(np.floor(uv[ok, 0] + 0.5), 0, view.camera.width - 1).astype(np.intp)
         v = np.clip(np.floor(uv[ok, 1] + 0.5), 0, view.camera.height - 1).astype(np.intp)
-        rim[ys[sel[ok]], xs[sel[ok]]] = mixed_pixels(view.depth, side="far")[v, u]
+        with np.errstate(invalid="ignore"):
+            same = np.abs(view.depth[v, u] - z[ok]) <= 0.03 * z[ok]  # this source's sample of it
+        far = mixed_pixels(view.depth, side="far", quantization=quantization_of(view))
+        rim[ys[sel[ok]], xs[sel[ok]]] = far[v, u] & same
     return rim
