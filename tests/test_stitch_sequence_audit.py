@@ -394,3 +394,48 @@ def test_warp_to_its_own_camera_scores_inf_twice(tmp_path, capsys):
     a = save_view(_view(0), tmp_path / "a.json")
     assert _cli("warp", a, "--to", a, "-o", tmp_path / "x.png") == 0
     assert "PSNR over covered pixels inf dB vs a.json (whole image: inf dB)" in capsys.readouterr().err
+
+
+def test_new_panorama_functions_refuse_bad_input_by_name(tmp_path):
+    """check_rgbd_panorama, read_rig / is_rig_file and rim_samples: each bad input is a clear
+    error naming the argument (or the rig file and its key)."""
+    from panorama.stitch import check_rgbd_panorama, equirect_camera, is_rig_file, read_rig, rim_samples, stitch_rgbd
+
+    color = np.zeros((8, 16, 3), np.uint8)
+    rng = np.full((8, 16), 2.0, np.float32)
+    for args, exc, message in (
+            ((np.zeros((8, 8, 3), np.uint8), rng), ValueError, r"^color: expected an equirect image"),
+            ((color, rng[:4]), ValueError, r"^range_map: expected shape \(8, 16\)"),
+            ((color, rng.astype(np.int32)), TypeError, r"^range_map: expected a float range map"),
+            ((color, -rng), ValueError, r"^range_map: expected positive ranges"),
+            ((color, rng * np.nan), ValueError, r"^range_map: no pixel has a range")):
+        with pytest.raises(exc, match=message):
+            check_rgbd_panorama(*args)
+    with pytest.raises(ValueError, match=r"^--panorama RANGE: expected positive"):
+        check_rgbd_panorama(color, -rng, names=("--panorama COLOR", "--panorama RANGE"))
+
+    rig = tmp_path / "rig.json"
+    assert not is_rig_file(tmp_path / "missing.json") and not is_rig_file(tmp_path)
+    with pytest.raises(FileNotFoundError, match="rig file .*rig.json: not found"):
+        read_rig(rig)
+    good = {"format": "ibr-rig", "version": 1, "views": ["a.json"]}
+    for doc, message in (({**good, "version": 2}, "expected format 'ibr-rig' version 1"),
+                         ({**good, "views": []}, "'views' must be a non-empty list"),
+                         ({**good, "views": "a.json"}, "'views' must be a non-empty list"),
+                         ({**good, "views": [""]}, "'views' must be a non-empty list"),
+                         ({**good, "center": [0, 0]}, "center: expected a finite 3-vector"),
+                         ({**good, "panorama": {"color": "c.png"}}, r"'panorama': missing key\(s\) range"),
+                         ({"format": "ibr-rig", "views": ["a.json"]}, r"missing key\(s\) version")):
+        rig.write_text(json.dumps(doc))
+        assert is_rig_file(rig)
+        with pytest.raises(ValueError, match=message):
+            read_rig(rig)
+    rig.write_text(json.dumps({**good, "center": [1, 2, 3]}))
+    assert read_rig(tmp_path).center.tolist() == [1, 2, 3] and read_rig(tmp_path).views == (tmp_path / "a.json",)
+
+    v = _view(0)
+    res = stitch_rgbd([v], equirect_camera(32))
+    with pytest.raises(TypeError, match="views: expected a sequence of ibr Views"):
+        rim_samples(res, None)
+    with pytest.raises(TypeError, match=r"views\[0\]: expected an ibr View"):
+        rim_samples(res, ["a.json"])
