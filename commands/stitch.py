@@ -87,12 +87,13 @@ def _check_args(args) -> None:
 def _expand_rig(args):
     """A rig file (``"format": "ibr-rig"``, or a folder holding ``rig.json``, as ``ibr samples``
     writes one) given as the only VIEW becomes its view files, and its capture point the default
-    ``--center``. Returns the rig file's path (an input), or None."""
+    ``--center``. Returns the files the rig names besides its views (inputs never written over:
+    the rig file, its centre panorama), or an empty list."""
     from panorama.stitch.rigs import RIG_FILE_NAME, is_rig_file, read_rig
 
     rigs = [v for v in args.views if is_rig_file(v)]
     if not rigs:
-        return None
+        return []
     if len(args.views) != 1:
         raise ValueError(f"VIEW.json: {rigs[0]} is a rig file; give it alone (its views are the rig's) or only "
                          "the view files")
@@ -101,7 +102,7 @@ def _expand_rig(args):
     if args.center is None:
         args.center = rig.center.tolist()
     path = Path(rigs[0])
-    return path / RIG_FILE_NAME if path.is_dir() else path
+    return [path / RIG_FILE_NAME if path.is_dir() else path, *(rig.panorama or ())]
 
 
 def _strip(faces: dict):
@@ -227,15 +228,15 @@ def run(args) -> int:
     from ibr.io.outputs import DEPTH_EXTS, IMAGE_EXTS, OutputPlan
     from ibr.sequence import is_sequence
 
-    rig = _expand_rig(args)
+    rig_files = _expand_rig(args)
     _check_args(args)
     if args.views and all(is_sequence(v) for v in args.views):
         return _run_sequences(args)
     out_path = Path(args.output)
     depth_arg = args.depth_out or str(out_path.with_name(out_path.stem + "_depth.exr"))
     with OutputPlan("ibr stitch", log=info) as plan:
-        if rig is not None:
-            plan.add_input("VIEW (rig file)", rig)
+        for path in rig_files:  # the rig file and the centre panorama it names
+            plan.add_input("VIEW (rig)", path)
         for v in args.views:
             plan.add_view_input("VIEW", v)
         if args.panorama:

@@ -439,3 +439,20 @@ def test_new_panorama_functions_refuse_bad_input_by_name(tmp_path):
         rim_samples(res, None)
     with pytest.raises(TypeError, match=r"views\[0\]: expected an ibr View"):
         rim_samples(res, ["a.json"])
+
+
+def test_stitch_never_writes_over_the_files_a_rig_names(tmp_path, capsys):
+    """The rig file's centre panorama (capture_pano_color.png / _range.exr) is an input too: -o
+    and --depth-out onto it overwrote it (exit 0)."""
+    import shutil
+
+    from samples import DATA_DIR
+
+    rig = tmp_path / "rig"
+    shutil.copytree(DATA_DIR / "rig", rig)
+    before = {p.name: p.read_bytes() for p in rig.iterdir()}
+    assert _cli("stitch", rig, "-o", rig / "capture_pano_color.png", "--width", 32, "--depth-out", "none") == 1
+    assert "is the input VIEW (rig)" in capsys.readouterr().err
+    assert _cli("stitch", rig, "-o", tmp_path / "x.png", "--width", 32, "--depth-out", rig / "capture_pano_range.exr") == 1
+    assert _cli("stitch", rig, "-o", tmp_path / "y.png", "--width", 32, "--depth-out", "none") == 0  # the rig is fine
+    assert {p.name: p.read_bytes() for p in rig.iterdir()} == before
