@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import sys
 import time
 from pathlib import Path
@@ -274,18 +275,13 @@ class _Placeholder:
         pass
 
 
+@functools.lru_cache(maxsize=None)
 def _numba_version() -> str:
     """numba's version from its installed metadata (read once: each lookup scans the
     distributions, ~10 ms), without importing numba."""
-    global _NUMBA_VERSION
-    if _NUMBA_VERSION is None:
-        import importlib.metadata
+    import importlib.metadata
 
-        _NUMBA_VERSION = importlib.metadata.version("numba")
-    return _NUMBA_VERSION
-
-
-_NUMBA_VERSION = None
+    return importlib.metadata.version("numba")
 
 
 def _numba_cache_dir(path: Path) -> Path | None:

@@ -168,8 +168,7 @@ def _densify(points, step: float, box):
         return np.empty((0, 2)), np.empty(0, bool), np.empty(0, int)
     out, flag, piece = [], [], []
     k, prev_end = 0, None
-    segments = zip(points[:-1], points[1:]) if len(points) > 1 else [(points[0], points[0])] * len(points)
-    for a, b in segments:
+    for a, b in list(zip(points[:-1], points[1:])) or [(points[0], points[0])]:  # one point: a dot
         clipped = _clip_segment(a, b, box)
         if clipped is None:
             continue
@@ -210,8 +209,7 @@ def _clip_segment(a, b, box):
 
 
 def _runs(mask, piece):
-    """(start, stop) of every run of True in the 1-D bool ``mask`` within one ``piece``."""
-    cut = np.concatenate([[True], piece[1:] != piece[:-1]])
-    starts = np.nonzero(mask & (cut | ~np.concatenate([[False], mask[:-1]])))[0]
-    ends = np.nonzero(mask & (np.concatenate([cut[1:], [True]]) | ~np.concatenate([mask[1:], [False]])))[0] + 1
-    return list(zip(starts, ends))
+    """(start, stop) of every run of True in the 1-D bool ``mask`` within one ``piece`` (>= 1)."""
+    label = np.where(mask, piece, 0)
+    bounds = np.concatenate([[0], np.flatnonzero(np.diff(label)) + 1, [len(label)]])
+    return [(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if label[a] > 0]
