@@ -171,8 +171,7 @@ def _infer_outputs(argv) -> tuple:
 def _on_command_line(argv, value: str) -> bool:
     """Whether ``value`` is one of ``argv``'s tokens or the value of an option (``--x=value``,
     ``-ovalue``): where the staging can redirect it."""
-    return value in argv or any(val == value for _, _, val in _option_value_pairs(argv)) or any(
-        a.startswith("-") and not a.startswith("--") and len(a) > 2 and a[2:] == value for a in argv)
+    return value in argv or any(val == value for _, _, val in _option_value_pairs(argv))
 
 
 def _parse(parser, argv, where: str):
