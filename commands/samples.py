@@ -106,19 +106,22 @@ def run(args) -> int:
 
 def bundled_view_files():
     """The view files shipped in ``samples/data`` (JSON documents with format ``ibr-view``)."""
-    import json
-
     from samples import DATA_DIR
 
-    found = []
-    for path in sorted(DATA_DIR.glob("*.json")) if DATA_DIR.is_dir() else []:
-        try:
-            doc = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            continue
-        if isinstance(doc, dict) and doc.get("format") == "ibr-view":
-            found.append(path)
-    return found
+    return [p for p in sorted(DATA_DIR.glob("*.json")) if _is_view_file(p)] if DATA_DIR.is_dir() else []
+
+
+def _is_view_file(path) -> bool:
+    """Whether ``path`` is a JSON document of format ``ibr-view``."""
+    import json
+
+    if path.suffix != ".json":
+        return False
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(doc, dict) and doc.get("format") == "ibr-view"
 
 
 def bundled_rig_files():
@@ -133,7 +136,6 @@ def copy_rig(files, out_dir):
     """Copy the rig's files into ``out_dir``: view files through :func:`copy_view_file` (checked,
     with the images they name), the others (``rig.json``, the centre panorama) as they are.
     Returns the view files written (paths in ``out_dir``)."""
-    import json
     import shutil
     from pathlib import Path
 
@@ -141,7 +143,7 @@ def copy_rig(files, out_dir):
 
     copied, views = set(), []
     for p in files:
-        if p.suffix == ".json" and json.loads(p.read_text(encoding="utf-8")).get("format") == "ibr-view":
+        if _is_view_file(p):
             views.append(copy_view_file(p, out_dir))
             copied.update([p.name] + _referenced_names(p))
     for p in files:
