@@ -413,6 +413,12 @@ def test_new_panorama_functions_refuse_bad_input_by_name(tmp_path):
             check_rgbd_panorama(*args)
     with pytest.raises(ValueError, match=r"^--panorama RANGE: expected positive"):
         check_rgbd_panorama(color, -rng, names=("--panorama COLOR", "--panorama RANGE"))
+    from panorama.stitch import ods_from_panorama
+
+    one = np.full((64, 128), np.nan, np.float32)
+    one[0, 0] = 2.0  # one range, lost when the faces are resampled (ods_from_views([]) said "views")
+    with pytest.raises(ValueError, match="^range_map: no cube face of the panorama keeps a range"):
+        ods_from_panorama(np.zeros((64, 128, 3), np.uint8), one)
 
     rig = tmp_path / "rig.json"
     assert not is_rig_file(tmp_path / "missing.json") and not is_rig_file(tmp_path)

@@ -30,7 +30,8 @@ from ..directions import FACE_NAMES
 from .rgbd import Stitched, check_views, stitch_rgbd
 from .rigs import cube_rig, ods_cameras
 
-__all__ = ["ODS_LAYOUTS", "OdsPair", "check_rgbd_panorama", "ods_from_panorama", "ods_from_views", "pack_ods", "panorama_views"]
+__all__ = ["ODS_LAYOUTS", "OdsPair", "check_rgbd_panorama", "ods_from_panorama", "ods_from_views", "pack_ods",
+           "panorama_views"]
 
 #: Output layouts of :func:`pack_ods`.
 ODS_LAYOUTS = ("top-bottom", "sbs", "anaglyph", "cube")
@@ -149,6 +150,8 @@ def ods_from_panorama(color, range_map, *, width: int | None = None, ipd: float 
     its directions are holes of the eyes.
     """
     views = [v for v in panorama_views(color, range_map, face_size=face_size) if np.isfinite(v.depth).any()]
+    if not views:  # a few ranges, lost in the faces' resampling
+        raise ValueError("range_map: no cube face of the panorama keeps a range: nothing to stitch")
     width = np.asarray(color).shape[1] if width is None else width
     return ods_from_views(views, width, ipd=ipd, fade_start_deg=fade_start_deg, fade_end_deg=fade_end_deg,
                           center=(0.0, 0.0, 0.0), fill=fill, mesh_options=mesh_options, progress=progress,
