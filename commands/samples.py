@@ -113,15 +113,9 @@ def bundled_view_files():
 
 def _is_view_file(path) -> bool:
     """Whether ``path`` is a JSON document of format ``ibr-view``."""
-    import json
+    from ibr.io.view_files import VIEW_FORMAT, json_format
 
-    if path.suffix != ".json":
-        return False
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    return isinstance(doc, dict) and doc.get("format") == "ibr-view"
+    return path.suffix == ".json" and json_format(path) == VIEW_FORMAT
 
 
 def bundled_rig_files():

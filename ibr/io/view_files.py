@@ -33,8 +33,8 @@ from ..base.view import View
 from .images import (_depth_array, _depth_values, _require_file, atomic_path, check_write_dtype, read_image,
                      write_depth, write_image)
 
-__all__ = ["DEPTH_ENCODINGS", "VIEW_FORMAT", "VIEW_KEYS", "VIEW_VERSION", "load_camera", "load_view", "save_view",
-           "view_to_dict"]
+__all__ = ["DEPTH_ENCODINGS", "VIEW_FORMAT", "VIEW_KEYS", "VIEW_VERSION", "json_format", "load_camera", "load_view",
+           "save_view", "view_to_dict"]
 
 VIEW_FORMAT = "ibr-view"
 VIEW_VERSION = 1
@@ -67,6 +67,16 @@ VIEW_KEYS = ("format", "version", "name", "color", "depth", "camera")
 
 
 # --------------------------------------------------------------------------- view files
+def json_format(path) -> str | None:
+    """The ``"format"`` of the JSON object in file ``path`` (``"ibr-view"``, ``"ibr-rig"``,
+    ``"ibr-sequence"`` ...), or None when it is no readable JSON object with one."""
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+    return doc.get("format") if isinstance(doc, dict) else None
+
+
 def read_json(path, what: str):
     """The JSON document of a file; ``FileNotFoundError`` / ``ValueError`` name ``what`` and the
     path (shared by view, tour and other tools' files)."""

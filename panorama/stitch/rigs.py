@@ -16,6 +16,7 @@ import numpy as np
 from ibr.base.camera import Camera
 from ibr.base.validate import check_finite_scalar, check_image_size, check_keys
 from ibr.base.ray_camera import SphericalCamera
+from ibr.io.view_files import json_format
 
 from ..directions import WORLD_FROM_FACE
 
@@ -138,13 +139,7 @@ def is_rig_file(path) -> bool:
         return (p / RIG_FILE_NAME).is_file()
     if p.name == RIG_FILE_NAME:
         return True
-    if p.suffix.lower() != ".json" or not p.is_file():
-        return False
-    try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    return isinstance(doc, dict) and doc.get("format") == "ibr-rig"
+    return p.suffix.lower() == ".json" and json_format(p) == "ibr-rig"
 
 
 def read_rig(path) -> RigFile:

@@ -114,11 +114,9 @@ def _load_frame(f: Frame) -> View:
 
 def is_sequence_manifest(path) -> bool:
     """Whether ``path`` is an ``ibr-sequence`` manifest (as an earlier import wrote it)."""
-    try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return False
-    return isinstance(doc, dict) and doc.get("format") == SEQUENCE_FORMAT
+    from ..view_files import json_format
+
+    return json_format(path) == SEQUENCE_FORMAT
 
 
 def check_sequence_name(name, frame_names) -> None:
