@@ -114,3 +114,14 @@ def test_a_misspelt_encoding_parameter_is_matched_against_the_parameters(tmp_pat
         (tmp_path / "v.json").write_text(json.dumps(bad))
         with pytest.raises(ValueError, match=rf"{key}\b.*did you mean '{near}'"):
             load_view(tmp_path / "v.json")
+
+
+def test_json_format_reads_the_format_or_none(tmp_path):
+    from ibr.io.view_files import json_format
+
+    (tmp_path / "v.json").write_text(json.dumps({"format": "ibr-view"}))
+    (tmp_path / "list.json").write_text("[1, 2]")
+    (tmp_path / "bad.json").write_bytes(b"\x89PNG")
+    assert json_format(tmp_path / "v.json") == "ibr-view"
+    assert json_format(tmp_path / "list.json") is None and json_format(tmp_path / "bad.json") is None
+    assert json_format(tmp_path / "missing.json") is None and json_format(tmp_path) is None
