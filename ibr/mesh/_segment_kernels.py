@@ -433,7 +433,7 @@ def _row_exceeds(row, u0, u1, base, a, uc, limit):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rect_fit_within(zp, u0, v0, u1, v1, limit):
     """True when every |residual| of the least-squares plane over a full rect is <= ``limit``.
 
@@ -645,7 +645,7 @@ def _edge_prefix_kernel(zp, thr, ch, rv):
                 _add_row(rv[u + 1, first : first + nb], rv[u, first : first + nb], vflags[u * blk : u * blk + nb], nb)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _quick_reject(zp, u0, v0, u1, v1, tol):
     """True when no plane can fit the rect within ``tol`` (exact necessary condition).
 
@@ -711,7 +711,7 @@ def _profile_cache(h, w):
             np.empty((3, w), np.float64))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _crease_split_cached(zp, u0, v0, u1, v1, peak, col_sum, col_key, row_sum, row_key, rows):
     """:func:`crease_split` with its per-line sums kept between calls of one split.
 

@@ -55,7 +55,7 @@ def _corner_tgt(uc, vc, a, b, c, ifx, ify, cx, cy, r, t):
     return x, y, z, True
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _grow(x, y, z, kt, lim, umin, umax, vmin, vmax):
     iz = 1.0 / z
     uu = min(max(kt[0] * x * iz + kt[2], -lim), lim)
@@ -357,7 +357,7 @@ def _quad_at(qop, x, y):
     return qop[min(max(int(np.floor(y + 0.5)), 0), h - 1), min(max(int(np.floor(x + 0.5)), 0), w - 1)]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _crack_between(za, zb, ua, va, ub, vb, rel, qop):
     """Whether the gap between two covered target pixels (depths za, zb; source coordinates
     (ua, va), (ub, vb)) is a crack of one surface: their depths agree within ``rel`` and the
@@ -368,10 +368,10 @@ def _crack_between(za, zb, ua, va, ub, vb, rel, qop):
     if not (abs(za - zb) <= rel * min(za, zb)):
         return False
     qm = _quad_at(qop, 0.5 * (ua + ub), 0.5 * (va + vb))
-    return qm >= 0 and (qm == _quad_at(qop, ua, va) or qm == _quad_at(qop, ub, vb))
+    return qm >= 0 and (qm == _quad_at(qop, 1.0 * ua, 1.0 * va) or qm == _quad_at(qop, 1.0 * ub, 1.0 * vb))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _close_row_cracks(drow, crow, murow, mvrow, width, rel, qop):
     """One-pixel cracks of one target row closed (see :func:`_raster_quads`, ``crack_rel``)."""
     for u in range(1, width - 1):
