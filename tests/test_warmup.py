@@ -37,19 +37,19 @@ def _kernels_compiled_by(run: str, env) -> list[str]:
 
 
 def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
-    """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the mesh's plane fit,
-    the rasterizer and the fill kernels; a real interpolation afterwards compiles none of those (it
+    """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the plane fit, the
+    rasterizer and the fill kernels; a real interpolation afterwards compiles none of those (it
     loads them), only the segmentation's edge prefix and split and the compositor."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
     marks = tmp_path / "marks"
     marks.mkdir()
     subprocess.run([sys.executable, "-m", "ibr.render.warmup", "frame", str(marks)], env=env, check=True, timeout=300)
-    assert sorted(p.name for p in marks.iterdir()) == ["fill", "plane-fit", "raster"]  # each marked once cached
+    assert sorted(p.name for p in marks.iterdir()) == ["fill", "raster"]  # each group marked once cached
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push",
-            "_fill_kernels.axis_background", "_segment_kernels._fit_planes_kernel"} <= cached
-    # the edge prefix and the split are the main process's (it reaches them first)
-    assert not {"_segment_kernels._edge_prefix_kernel", "_segment_kernels._split_edges_kernel"} & cached
+            "_fill_kernels.axis_background"} <= cached
+    # the segmentation and the plane fit are the main process's (it reaches them first)
+    assert not {n for n in cached if n.startswith("_segment_kernels")}
     compiled = _kernels_compiled_by(
         "from ibr.io import load_view\n"
         "from ibr.render.view_synthesis import interpolate\n"
@@ -57,9 +57,8 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
         "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
         "interpolate(a, b, 0.5, fill='inpaint')\n", env)
     assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels"))]
-    assert "_segment_kernels._fit_planes_kernel" not in compiled
-    # the main process's share: the segmentation's edge prefix and split, the compositor
-    assert {"_segment_kernels._edge_prefix_kernel", "_segment_kernels._split_edges_kernel",
+    # the main process's share: the segmentation's edge prefix, split and plane fit, the compositor
+    assert {"_segment_kernels._split_edges_kernel", "_segment_kernels._fit_planes_kernel",
             "_composite_kernels.composite_rgbt"} <= set(compiled)
 
 

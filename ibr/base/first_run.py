@@ -26,14 +26,14 @@ __all__ = ["GROUPS", "HELPER_OPT", "MAX_WAIT_S", "await_kernels", "mark", "start
 
 _STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
 #: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
-GROUPS = {"frame": ("plane-fit", "raster", "fill"),
+GROUPS = {"frame": ("raster", "fill"),
           "stitch": ("ray-setup", "plane-fit", "blend", "background-fill"),
           "stitch-ods": ("ray-setup", "plane-fit", "blend", "row-fill"),
           "mesh": ("segment", "plane-fit")}
 _ALL_GROUPS = tuple(sorted({g for groups in GROUPS.values() for g in groups}))
 _READY: set = set()  # groups this process no longer waits for
-#: LLVM optimization level of the kernels the "frame" helper compiles (the plane fit, the
-#: rasterizer and the fill; numba's default is 3). -O2 compiles them 0.2-0.45 s faster (the helper
+#: LLVM optimization level of the kernels the "frame" helper compiles (the rasterizer and the
+#: fill; numba's default is 3). -O2 compiles them 0.2-0.45 s faster (the helper
 #: alone: 4.0-4.2 -> 3.8 s, fresh caches), and their frames run as fast (paired runs, each from
 #: its own cache: 512² and 1080p two-source frames, the motorcycle warp within noise). The results
 #: are bit-identical (no fast-math in the rasterizer or the fill; the plane fit's re-associated
@@ -74,7 +74,7 @@ def await_kernels(group: str) -> None:
 
 def start_helper(kind: str = "frame") -> None:
     """Start the helper process for ``kind`` (a key of :data:`GROUPS`: "frame" for the
-    mesh's plane fit, the rasterizer and the fill (at -O2, :data:`HELPER_OPT`), "stitch" / "stitch-ods" for the ray rasterizer's setup,
+    rasterizer and the fill (at -O2, :data:`HELPER_OPT`), "stitch" / "stitch-ods" for the ray rasterizer's setup,
     the plane fit, the blend's accumulation and the mono / ODS panorama's hole fill, "mesh" for
     the segmentation's plane tests and plane fit) once per process (quietly; killed at exit if
     still running)."""

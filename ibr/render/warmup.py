@@ -4,12 +4,11 @@ numba compiles each kernel the first time it is called, one after the other, on 
 install's first ``ibr interpolate`` spent ~9 s compiling (segmentation 3.6 s, rasterizer 2.2 s,
 compositor 1.6 s, hole fill 1.8 s) while the second core idled.
 :func:`ibr.base.first_run.start_helper` starts ``python -m ibr.render.warmup``, which calls the
-mesh's plane fit, the rasterizer and then the hole fill (its directional pass and pull-push) on a tiny scene with the
+rasterizer and then the hole fill (its directional pass and pull-push) on a tiny scene with the
 argument types of a real run (uint8 colour, float32 depth, the mesh's read-only arrays), at LLVM
 -O2 (:data:`ibr.base.first_run.HELPER_OPT`), so they land in numba's on-disk cache while the main
-process compiles the segmentation's edge prefix and split and the compositor (the directional pass moved here from the
-main process: median first run 12.95 -> 12.70 s, three runs each on the 2-core machine; the plane
-fit in the tenth session, when the helper finished 0.45 s before the main process);
+process compiles the segmentation's edge prefix, split and plane fit and the compositor (the directional pass moved here from the
+main process: median first run 12.95 -> 12.70 s, three runs each on the 2-core machine);
 when the main process reaches them it loads them from the cache instead. ``python -m
 ibr.render.warmup stitch`` (``stitch-ods``) does the same for ``ibr stitch`` (the ray rasterizer's
 setup, the plane fit, the N-source blend's accumulation into a spherical camera and the mono (ODS)
@@ -39,19 +38,17 @@ __all__ = ["warm_frame_kernels", "warm_mesh_kernels", "warm_stitch_kernels"]
 
 
 def warm_frame_kernels(marks: Path | None = None) -> None:
-    """Call the mesh's plane fit, the rasterizer and the hole fill once on a tiny scene (types
-    as in a real run), in the order the main process will need them after its own segmentation
-    kernels (edge prefix and split); mark groups "plane-fit", "raster" and "fill" (the
+    """Call the rasterizer and the hole fill once on a tiny scene (types as in a real run), in
+    the order the main process will need them after its own segmentation kernels and plane fit
+    (the rasterizer with its crack closing is the longest compile of the first run: the main
+    process, waiting for it, compiles the plane fit itself); mark groups "raster" and "fill" (the
     directional fill and the pull-push) in the directory ``marks`` as they land in the cache.
     :func:`ibr.base.first_run.start_helper` runs this process with LLVM at -O2
     (:data:`ibr.base.first_run.HELPER_OPT`)."""
     from ..base.camera import Camera
-    from ..mesh import _segment_kernels
     from . import fill
     from .rasterize import CRACK_REL, _rasterize_many_into, scratch_maps
 
-    _segment_kernels.fit_planes_inv_depth(np.ones((24, 32)), np.array([[0, 0, 32, 24]], np.int32))
-    _mark(marks, "plane-fit")
     h, w = 24, 32
     mesh = _tiny_mesh()
     moved = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h,
@@ -70,7 +67,7 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
 
 def _tiny_mesh():
     """A 32 x 24 source of two quads (a step from z = 2 to z = 4) with the argument types of a
-    real mesh, built by hand (the kernels it feeds are compiled without waiting for a
+    real mesh, built by hand (no plane fit: the main process compiles it after its
     segmentation, #13)."""
     from ..base.camera import Camera
     from ..mesh.quad_mesh import QuadMesh
