@@ -101,9 +101,10 @@ def test_the_stitch_helper_fills_the_cache_a_real_stitch_uses(tmp_path):
 
 
 def test_the_mesh_helper_fills_the_cache_a_real_mesh_uses(tmp_path):
-    """``python -m ibr.render.warmup mesh`` caches the split's plane tests and the plane fit
-    with the argument types of a real segmentation: building a mesh afterwards
-    compiles none of them, only the edge prefix and the split (the main process's share)."""
+    """``python -m ibr.render.warmup mesh`` caches the split's own callees (the plane test's
+    moments and row check, the crease split's line profile) and the plane fit with the argument
+    types of a real segmentation: building a mesh afterwards compiles none of them, only the edge
+    prefix and the split (the main process's share)."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
     marks = tmp_path / "marks"
     marks.mkdir()
@@ -116,7 +117,7 @@ def test_the_mesh_helper_fills_the_cache_a_real_mesh_uses(tmp_path):
         "build_mesh(load_view(DATA_DIR / 'room_a.json'))\n", env)
     ours = [k for k in compiled if k.startswith("_segment_kernels")]
     assert "_segment_kernels._split_edges_kernel" in ours and "_segment_kernels._edge_prefix_kernel" in ours
-    for kernel in ("_quick_reject", "rect_fit_within", "_crease_split_cached", "_fit_planes_kernel"):
+    for kernel in ("_rect_moments", "_row_exceeds", "_add_abs_second_diff", "_fit_planes_kernel"):
         assert f"_segment_kernels.{kernel}" not in ours
 
 

@@ -131,19 +131,20 @@ def warm_stitch_kernels(marks: Path | None = None, eye_fill: str = "any") -> Non
 
 
 def warm_mesh_kernels(marks: Path | None = None) -> None:
-    """For ``ibr mesh``: the kernels the segmentation's split calls (quick reject, plane test,
-    crease split) and the plane fit, called directly on a small z' image with the
-    argument types of a real run (int32 rect bounds, as popped from the split's stack; float64
-    z'), groups "segment" and "plane-fit". The main process compiles the edge prefix and the split
-    meanwhile."""
+    """For ``ibr mesh``: the kernels the segmentation's split calls as functions of their own (the
+    plane fit's moments, the plane test's row check, the crease split's line profile; the plane
+    test, the quick reject and the crease split themselves are inlined into the split) and the
+    plane fit, called directly on a small z' image with the argument types of a real run (int32
+    rect bounds, as popped from the split's stack; float64 z'), groups "segment" and
+    "plane-fit". The main process compiles the edge prefix and the split meanwhile."""
     from ..mesh import _segment_kernels as k
 
     h, w = 48, 64
     zp = np.linspace(0.0, 1.0, h * w).reshape(h, w)
     u0, v0, u1, v1 = np.int32(0), np.int32(0), np.int32(w), np.int32(h)
-    k._quick_reject(zp, u0, v0, u1, v1, 0.1)
-    k.rect_fit_within(zp, u0, v0, u1, v1, 0.1)
-    k._crease_split_cached(zp, u0, v0, u1, v1, 5.0, *k._profile_cache(h, w))
+    k._rect_moments(zp, u0, v0, u1, v1)
+    k._row_exceeds(zp[v0], u0, u1, 0.5, 0.0, 31.5, 0.1)
+    k._add_abs_second_diff(k._profile_cache(h, w)[0][u0:u1], zp[v0, u0:u1], np.int64(w))
     _mark(marks, "segment")  # the split can start; the plane fit is needed only after it
     k.fit_planes_inv_depth(zp, np.array([[0, 0, w, h]], np.int32))
     _mark(marks, "plane-fit")
