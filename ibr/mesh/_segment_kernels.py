@@ -698,28 +698,17 @@ def crease_split(zp, u0, v0, u1, v1, peak):
     O((w + h) * CREASE_SAMPLES) rather than O(w * h). Otherwise (smooth curvature, or a
     rect too thin for a stencil) the rect is cut in the middle of its longer side.
     """
-    return _crease_split_cached(zp, np.int64(u0), np.int64(v0), np.int64(u1), np.int64(v1), peak,
-                                *_profile_cache(*zp.shape))
-
-
-def _profile_cache(h, w):
-    """Empty line-profile caches for :func:`_crease_split_cached`: (column sums (W,), their key,
-    row sums (H,), their key, scratch rows (3, W)); a key is (v0, v1, first, end) /
-    (u0, u1, first, end), -1 = empty. Allocated here, not in a kernel (#13: each allocation
-    signature in a kernel cost a first run 0.1-0.2 s of compiling)."""
-    return (np.empty(w, np.float64), np.full(4, -1, np.int64), np.empty(h, np.float64), np.full(4, -1, np.int64),
-            np.empty((3, w), np.float64))
+    return _crease_split_kernel(zp, np.int64(u0), np.int64(v0), np.int64(u1), np.int64(v1), peak,
+                                np.empty(zp.shape[1], np.float64))
 
 
 @njit(cache=True, inline="always")
-def _crease_split_cached(zp, u0, v0, u1, v1, peak, col_sum, col_key, row_sum, row_key, rows):
-    """:func:`crease_split` with its per-line sums kept between calls of one split.
-
-    A column's sum depends only on the rect's rows (v0, v1: which rows are sampled, in which
-    order) and a row's sum only on its columns (u0, u1), so a rect that shares them with the last
-    rect profiled in that direction (a failed fit's child, after a thin strip was cut off) reuses
-    the sums of its lines instead of re-reading them: the same floats, added in the same order.
-    """
+def _crease_split_kernel(zp, u0, v0, u1, v1, peak, col_sum):
+    """:func:`crease_split` with a scratch row ``col_sum`` (W,) float64 for the column profile
+    (allocated by the caller, once per split: an allocation in a kernel cost a first run
+    0.1-0.2 s of compiling, #13). Written plainly: keeping line sums between the calls of one
+    split, and rolling row buffers, ran the meshes 3-5 % faster but cost a first run 0.29 s of
+    compiling (median of five)."""
     w = u1 - u0
     h = v1 - v0
     sv = max(1, h // CREASE_SAMPLES)  # lines are sampled: at most ~CREASE_SAMPLES per profile
@@ -730,15 +719,10 @@ def _crease_split_cached(zp, u0, v0, u1, v1, peak, col_sum, col_key, row_sum, ro
     cu = -1
     tot_u = 0.0
     if w >= 3:
-        if not (col_key[0] == v0 and col_key[1] == v1 and col_key[2] <= u0 + 1 and u1 - 1 <= col_key[3]):
-            acc = col_sum[u0:u1]  # acc[i]: column u0 + i
-            acc[:] = 0.0
-            for v in range(v0, v1, sv):
-                _add_abs_second_diff(acc, zp[v, u0:u1], w)
-            col_key[0] = v0
-            col_key[1] = v1
-            col_key[2] = u0 + 1
-            col_key[3] = u1 - 1
+        acc = col_sum[u0:u1]
+        acc[:] = 0.0
+        for v in range(v0, v1, sv):
+            _add_abs_second_diff(acc, zp[v, u0:u1], w)
         for c in range(u0 + 1, u1 - 1):
             m = col_sum[c] / nsv
             tot_u += m
@@ -751,29 +735,12 @@ def _crease_split_cached(zp, u0, v0, u1, v1, peak, col_sum, col_key, row_sum, ro
     cv = -1
     tot_v = 0.0
     if h >= 3:
-        if not (row_key[0] == u0 and row_key[1] == u1 and row_key[2] <= v0 + 1 and v1 - 1 <= row_key[3]):
-            # the sampled pixels of rows r - 1, r, r + 1 in rolling buffers: each row read once
-            ra = rows[0]
-            rb = rows[1]
-            rc = rows[2]
-            for i in range(nsu):
-                ra[i] = zp[v0, u0 + i * su]
-                rb[i] = zp[v0 + 1, u0 + i * su]
-            for r in range(v0 + 1, v1 - 1):
-                nxt = zp[r + 1]
-                s = 0.0
-                for i in range(nsu):
-                    x = nxt[u0 + i * su]
-                    rc[i] = x
-                    s += abs(ra[i] - 2.0 * rb[i] + x)
-                row_sum[r] = s
-                ra, rb, rc = rb, rc, ra
-            row_key[0] = u0
-            row_key[1] = u1
-            row_key[2] = v0 + 1
-            row_key[3] = v1 - 1
         for r in range(v0 + 1, v1 - 1):
-            m = row_sum[r] / nsu
+            s = 0.0
+            for i in range(nsu):
+                u = u0 + i * su
+                s += abs(zp[r - 1, u] - 2.0 * zp[r, u] + zp[r + 1, u])
+            m = s / nsu
             tot_v += m
             if m > best_v:
                 best_v = m
@@ -805,12 +772,12 @@ def split_edges(zp, ch, rv, tol, first_dir, peak):
     cap = h * w + 1
     out = np.empty((cap, 4), np.int32)  # buffers allocated here, not in the kernel (#13)
     stack = np.empty((cap + 1, 5), np.int32)
-    n = _split_edges_kernel(zp, ch, rv, tol, int(first_dir), peak, out, stack, *_profile_cache(h, w))
+    n = _split_edges_kernel(zp, ch, rv, tol, int(first_dir), peak, out, stack, np.empty(w, np.float64))
     return out[:n].copy()
 
 
 @njit(cache=True)
-def _split_edges_kernel(zp, ch, rv, tol, first_dir, peak, out, stack, col_sum, col_key, row_sum, row_key, rows):
+def _split_edges_kernel(zp, ch, rv, tol, first_dir, peak, out, stack, col_sum):
     """:func:`split_edges` into ``out`` (capacity H W + 1 rects, ``stack`` one more); returns the
     number of rects."""
     h, w = zp.shape
@@ -876,7 +843,7 @@ def _split_edges_kernel(zp, ch, rv, tol, first_dir, peak, out, stack, col_sum, c
                 out[n, 3] = v1
                 n += 1
                 continue
-            d, split = _crease_split_cached(zp, u0, v0, u1, v1, peak, col_sum, col_key, row_sum, row_key, rows)
+            d, split = _crease_split_kernel(zp, u0, v0, u1, v1, peak, col_sum)
         _push_children(stack, top, u0, v0, u1, v1, d, split)
         top += 2
     return n

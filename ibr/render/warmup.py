@@ -144,7 +144,7 @@ def warm_mesh_kernels(marks: Path | None = None) -> None:
     u0, v0, u1, v1 = np.int32(0), np.int32(0), np.int32(w), np.int32(h)
     k._rect_moments(zp, u0, v0, u1, v1)
     k._row_exceeds(zp[v0], u0, u1, 0.5, 0.0, 31.5, 0.1)
-    k._add_abs_second_diff(k._profile_cache(h, w)[0][u0:u1], zp[v0, u0:u1], np.int64(w))
+    k._add_abs_second_diff(np.zeros(w)[u0:u1], zp[v0, u0:u1], np.int64(w))
     _mark(marks, "segment")  # the split can start; the plane fit is needed only after it
     k.fit_planes_inv_depth(zp, np.array([[0, 0, w, h]], np.int32))
     _mark(marks, "plane-fit")
