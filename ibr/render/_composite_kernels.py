@@ -275,10 +275,8 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
                     drow[u] = b
                 crow[u] = True
                 if use_trust and not (has_a and has_b):  # one layer: is it a rim beside a hole?
-                    if has_a:
-                        rrow[u] = _nearest(ra, ua[v, u], va[v, u]) and _beside_hole(za, zb, v, u)
-                    else:
-                        rrow[u] = _nearest(rb, ub[v, u], vb[v, u]) and _beside_hole(za, zb, v, u)
+                    on_rim = _nearest(ra, ua[v, u], va[v, u]) if has_a else _nearest(rb, ub[v, u], vb[v, u])
+                    rrow[u] = on_rim and _beside_hole(za, zb, v, u)
             else:
                 orow[u, 0] = 0
                 orow[u, 1] = 0
