@@ -11,6 +11,10 @@ from numba import njit
 
 __all__: list[str] = []
 
+# The pull-push and directional kernels are nogil with error_model="numpy", the options of the
+# rasterizer's kernels: numba then compiles the builtins they use (min, max, int) once for both
+# in the first-run helper (#13).
+
 @njit(cache=True, error_model="numpy")
 def background_fill(color, depth, holes, rel_tol, max_dist, is_int, filled):
     """Fill hole pixels from the *farther* of their nearest non-hole neighbours (in place).
@@ -229,7 +233,7 @@ def _bg_weight(z, izref, squarings):
     return max(r, np.float32(1e-30))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def pp_pull0(color, depth, holes, izref, squarings, coarse):
     """Level 0 -> 1 of the pull-push pyramid in one pass: every covered pixel with valid depth
     enters as ``(w c_0, .., w c_{C-1}, w z, w)`` with the background weight of :func:`_bg_weight`,
@@ -280,7 +284,7 @@ def _up_taps(x, n):
     return c, o
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def pp_push(sums, coarse_val, eps, need, out_val):
     """Push step: ``val = (S + e up(V)) / (W + e)`` with ``e = eps * up(W_coarse) / 4``; the
     coarse level's mean values V (last channel: the weight behind each value, its own sum plus
@@ -310,7 +314,7 @@ def pp_push(sums, coarse_val, eps, need, out_val):
             out_val[v, u, nv] = den  # the value's weight: own + what the coarser levels carry
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def binomial3(src, need, out):
     """3x3 binomial ([1 2 1] / 4 in each direction) of ``src`` (H, W, N) at the flagged cells,
     taps clamped at the border; other cells copy ``src``."""
@@ -330,7 +334,7 @@ def binomial3(src, need, out):
                     + 0.125 * (src[v0, u, k] + src[v2, u, k] + src[v, u0, k] + src[v, u2, k]) + 0.25 * src[v, u, k]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def axis_background(color, depth, holes, out, ok, out_z, max_run):
     """Directional background fill of the hole pixels along rows (pass transposed views for
     columns): each run of hole pixels takes the colour of the farther of its two covered
@@ -365,7 +369,7 @@ def axis_background(color, depth, holes, out, ok, out_z, max_run):
                         out[v, k, c] = color[v, src, c]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, direct_z, gate, is_int, filled):
     """Last push step, fused with the write: every hole pixel takes the bilinear upsampling of
     level 1's values (it has no weight of its own), colour mixed as ``(1 - mix) * pushed + mix

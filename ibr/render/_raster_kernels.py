@@ -32,12 +32,15 @@ __all__: list[str] = []
 
 # Every kernel uses error_model="numpy": a division by zero gives inf/NaN (which the kernels
 # test for) instead of numba's default Python-style check and exception on every division.
+# The callees are nogil like the kernels that call them: numba compiles the builtins a kernel
+# uses (min, max, int) once per set of options in a process, and the first-run helper compiled
+# them twice (0.07 s, #13); the fill kernels it compiles after them share the same options.
 
 # Layout of the per-quad coefficient rows computed by setup_quads (12 float64 per quad).
 _G, _HX, _HY, _HZ = 0, 3, 6, 9
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _corner_tgt(uc, vc, a, b, c, ifx, ify, cx, cy, r, t):
     """Target-frame point of the source pixel-edge corner (uc, vc) on the plane 1/z = a u + b v + c
     (ifx, ify: reciprocal source focal lengths)."""
@@ -63,7 +66,7 @@ def _grow(x, y, z, kt, lim, umin, umax, vmin, vmax):
     return min(umin, uu), max(umax, uu), min(vmin, vv), max(vmax, vv)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _clip_edge(xa, ya, za, xb, yb, zb, eps, kt, lim, umin, umax, vmin, vmax):
     """Grow the projected bounding box by edge a->b clipped to z > eps (Sutherland-Hodgman:
     the start vertex if in front, plus the crossing point with z = eps)."""
@@ -164,7 +167,7 @@ def _setup_quads(q0, q1, rects, planes, ks, r, t, kt_inv, kt, width, height, coe
 setup_quads = njit(cache=True, error_model="numpy", nogil=True)(_setup_quads)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _span(e0, e1, e2, v, strict, lo, hi, slo, shi):
     """Narrow the integer range [lo, hi] to u with e0*u + e1*v + e2 >= 0 (> 0 if strict),
     conservatively (one pixel of slack; the exact test is per pixel), and [slo, shi] to the u
@@ -336,7 +339,7 @@ def _raster_quads(band0, band1, rects, coef, bbox, clamp, width, height, band_st
                 _close_row_cracks(drow, crow, murow, mvrow, width, crack_rel, src_qop)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _quad_at(qop, x, y):
     """The source mesh's quad at the nearest pixel of (x, y) (clamped to the image; -1: none)."""
     h, w = qop.shape
