@@ -419,6 +419,45 @@ def test_background_rim_beside_a_disocclusion_is_marked_for_the_fill():
     assert replace[:2, 3].all() and replace.sum() == 2
 
 
+def test_background_rim_beside_the_other_sources_pixels_is_marked_for_the_fill():
+    """A rim sample of source a whose neighbour only source b covers (a's surface ends there: the
+    foreground beside it in a has moved away; no hole is left between the two) is marked too, by
+    the 8-bit, the float and the bicubic paths alike; a rim sample inside a's own layer is not
+    (the pole-rim lines on the clutter pair's face, issue 11)."""
+    from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite, source_trust
+    from ibr.render.rasterize import SourceMaps
+    from ibr.render.view_synthesis import _rim_samples_beside_holes
+
+    z = np.full((5, 8), 4.0, np.float32)
+    z[:, 4:] = 1.0  # foreground on the right: column 3 is each source's background rim
+    rim = mixed_pixels(z, side="far")
+    color = np.full((5, 8, 3), 30, np.uint8)
+    color[:, 3] = 120  # the rim mixes in the foreground's colour
+    color[:, 4:] = 200
+    h, w = 5, 6
+    rows = np.repeat(np.arange(h, dtype=np.float32)[:, None], w, 1)
+
+    def layer(cols, src_u):
+        u = np.full((h, w), -1e6, np.float32)
+        d = np.full((h, w), np.nan, np.float32)
+        u[:, cols], d[:, cols] = src_u, 4.0
+        v = np.where(np.isnan(d), np.float32(-1e6), rows)
+        return SourceMaps(u, v, d, ~np.isnan(d))
+
+    # target columns 0-2 from b's clean background, 3-5 from a: column 3 and 4 on a's rim pixel
+    maps = [layer([3, 4, 5], [3.0, 3.0, 1.0]), layer([0, 1, 2], [0.0, 1.0, 2.0])]
+    expected = np.zeros((h, w), bool)
+    expected[:, 3] = True  # beside column 2, which only b covers; column 4 has a on both sides
+    packed = pack_trust(source_trust(z), rim)
+    weights = np.array([0.5, 0.5])
+    exact = sample_composite([color, color], maps, weights, dtype=np.uint8, trust=[packed, packed])
+    fast = remap_composite([rgbt_source(color, packed[..., 0])] * 2, maps, weights, rims=[rim, rim])
+    assert exact.coverage.all() and fast.coverage.all()  # no hole anywhere
+    np.testing.assert_array_equal(exact.replace, expected)
+    np.testing.assert_array_equal(fast.replace, expected)
+    np.testing.assert_array_equal(_rim_samples_beside_holes(maps, [rim, rim]), expected)
+
+
 def test_ghost_outline_beside_a_disocclusion_is_gone_after_the_fill():
     """Clutter t = 0.75: behind the pole a disocclusion opens on the face; the background rim of
     the pole in the source (dark, pole colour mixed in) lay along it as a dark sliver. With

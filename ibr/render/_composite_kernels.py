@@ -161,12 +161,14 @@ def _on_rim(k, x, y):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _beside_hole(za, zb, v, u):
-    """Whether a 4-neighbour of target pixel (v, u) is covered by neither layer (a hole)."""
-    h, w = za.shape
+def _beside_gap(z, v, u):
+    """Whether a 4-neighbour of target pixel (v, u) is not covered by the layer of depths ``z``
+    (a hole, or a pixel only the other layer covers: either way that layer's surface ends there,
+    a disocclusion of its source opens beside the pixel)."""
+    h, w = z.shape
     for dv, du in ((-1, 0), (1, 0), (0, -1), (0, 1)):
         y, x = v + dv, u + du
-        if 0 <= y < h and 0 <= x < w and not (za[y, x] > 0.0) and not (zb[y, x] > 0.0):
+        if 0 <= y < h and 0 <= x < w and not (z[y, x] > 0.0):
             return True
     return False
 
@@ -182,9 +184,10 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
     trust and its 2x2 block minimum, negative on the background rim, see ``composite.pack_trust``), sampled
     with the same bilinear taps where a block holds a mixed pixel. ``rim`` (H, W) bool receives,
     where only one layer covers a pixel, whether its nearest source pixel is on that source's
-    background rim and a 4-neighbour is a hole (the rule of ``composite.rim_beside_holes``: the fill
-    recolours it; ``use_trust`` only, with two layers). Rows ``v0 .. v1-1`` only (serial, without
-    the GIL: :func:`ibr.render.bands.run_bands` runs row bands on all cores)."""
+    background rim and a 4-neighbour is not covered by that layer (the rule of
+    ``composite.rim_beside_holes``: the fill recolours it; ``use_trust`` only, with two layers).
+    Rows ``v0 .. v1-1`` only (serial, without the GIL: :func:`ibr.render.bands.run_bands` runs
+    row bands on all cores)."""
     w, nc = out.shape[1], out.shape[2]
     for v in range(v0, v1):
         zar, zbr = za[v], zb[v]
@@ -214,12 +217,12 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
                 _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = a
                 coverage[v, u] = True
-                rim[v, u] = use_trust and _on_rim(ka, ua[v, u], va[v, u]) and _beside_hole(za, zb, v, u)
+                rim[v, u] = use_trust and _on_rim(ka, ua[v, u], va[v, u]) and _beside_gap(za, v, u)
             elif has_b:
                 _sample_store(sb, ub[v, u], vb[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = b
                 coverage[v, u] = True
-                rim[v, u] = use_trust and _on_rim(kb, ub[v, u], vb[v, u]) and _beside_hole(za, zb, v, u)
+                rim[v, u] = use_trust and _on_rim(kb, ub[v, u], vb[v, u]) and _beside_gap(zb, v, u)
             else:
                 for ch in range(nc):
                     out[v, u, ch] = 0
@@ -235,7 +238,7 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
     ``composite.rgbt_source``); the rule of :func:`sample_composite2` with the trust read from
     channel 3. ``ra``, ``rb`` (H_s, W_s) bool: each source's background rim, looked up at the
     nearest source pixel of the maps (ua, va), (ub, vb) where only one layer covers a pixel and a
-    4-neighbour is a hole (``use_trust`` only). ``out`` (H, W, 3) uint8. Rows ``v0 .. v1-1``."""
+    4-neighbour is not covered by that layer (``use_trust`` only). ``out`` (H, W, 3) uint8. Rows ``v0 .. v1-1``."""
     w = out.shape[1]
     for v in range(v0, v1):
         # row views: with 2-D indexing in the pixel loop (numba cannot tell the arrays apart, so
@@ -274,9 +277,9 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
                     _copy3(orow, lbr, u)
                     drow[u] = b
                 crow[u] = True
-                if use_trust and not (has_a and has_b):  # one layer: is it a rim beside a hole?
+                if use_trust and not (has_a and has_b):  # one layer: is it a rim beside its gap?
                     on_rim = _nearest(ra, ua[v, u], va[v, u]) if has_a else _nearest(rb, ub[v, u], vb[v, u])
-                    rrow[u] = on_rim and _beside_hole(za, zb, v, u)
+                    rrow[u] = on_rim and _beside_gap(za if has_a else zb, v, u)
             else:
                 orow[u, 0] = 0
                 orow[u, 1] = 0

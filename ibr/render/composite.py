@@ -54,7 +54,7 @@ class Composite:
     """Result of :func:`composite`: ``color`` (H, W, C) in the requested dtype, ``depth`` (H, W)
     float32 planar z (NaN where no layer covers), ``coverage`` (H, W) bool; ``replace`` (H, W)
     bool or None: covered pixels whose colour a hole fill should replace (background-rim samples
-    beside a hole, :func:`rim_beside_holes`)."""
+    beside a hole or the other layer, :func:`rim_beside_holes`)."""
 
     color: np.ndarray
     depth: np.ndarray
@@ -208,14 +208,17 @@ def pack_trust(trust, rim=None) -> np.ndarray:
 
 
 def rim_beside_holes(coverage, rim) -> np.ndarray:
-    """(H, W) bool: the pixels of ``rim`` that have an uncovered 4-neighbour.
+    """(H, W) bool: the pixels of ``rim`` that have a 4-neighbour ``coverage`` leaves out.
 
     ``rim`` marks pixels that only one source covers with a sample from its background rim
     (:func:`mixed_pixels` with ``side="far"``): its colour mixes in the foreground beside it in
-    that source. Where the target still shows that foreground next to it (no hole beside the
-    pixel, e.g. at the source's own pose) the mixture is right; beside a hole (a disocclusion
-    opened between the two surfaces) it is a dark or bright outline left on the background, and
-    the hole fill should replace its colour (:attr:`Composite.replace`).
+    that source. Where the target still shows that foreground next to it (the source's layer
+    covers every neighbour, e.g. at the source's own pose) the mixture is right; where that
+    source's layer ends beside the pixel (a disocclusion opened between the two surfaces: a hole,
+    or pixels only the other source sees) it is a dark or bright outline left on the background,
+    and the hole fill should replace its colour (:attr:`Composite.replace`). ``coverage`` is
+    therefore the coverage of the rim samples' own layer (one call per layer), or, for a single
+    source, of the target.
     """
     out = np.zeros(rim.shape, bool)
     ys, xs = np.nonzero(rim)  # few pixels: test their four neighbours only

@@ -323,25 +323,27 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
                      quantization=quant)
     if packed is None:
         return comp
-    replace = _rim_samples_beside_holes(maps, [t[..., 1] < 0 for t in packed], comp.coverage)
+    replace = _rim_samples_beside_holes(maps, [t[..., 1] < 0 for t in packed])
     return Composite(comp.color, comp.depth, comp.coverage, replace if replace.any() else None)
 
 
-def _rim_samples_beside_holes(maps, rims, coverage) -> np.ndarray:
+def _rim_samples_beside_holes(maps, rims) -> np.ndarray:
     """(H, W) bool: target pixels that one layer alone covers with a sample whose nearest source
     pixel lies on that source's background rim (``rims``: per source, ``mixed_pixels(side="far")``),
-    beside a hole (``~coverage``): what the bilinear 8-bit path's kernel marks as
-    :attr:`Composite.replace` (``_nearest`` and ``_beside_hole`` in ``_composite_kernels``), here
+    beside a pixel that layer does not cover: what the bilinear 8-bit path's kernel marks as
+    :attr:`Composite.replace` (``_nearest`` and ``_beside_gap`` in ``_composite_kernels``), here
     in numpy for the float-layer (bicubic) path."""
-    rim = np.zeros(coverage.shape, bool)
+    replace = np.zeros(maps[0].coverage.shape, bool)
     for i, (m, r) in enumerate(zip(maps, rims)):
         alone = m.coverage & ~maps[1 - i].coverage
         ys, xs = np.nonzero(alone)
         h, w = r.shape
         u = np.clip(np.floor(m.map_u[ys, xs] + 0.5), 0, w - 1).astype(np.intp)
         v = np.clip(np.floor(m.map_v[ys, xs] + 0.5), 0, h - 1).astype(np.intp)
+        rim = np.zeros(replace.shape, bool)
         rim[ys, xs] = r[v, u]
-    return rim_beside_holes(coverage, rim)
+        replace |= rim_beside_holes(m.coverage, rim)
+    return replace
 
 
 def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
