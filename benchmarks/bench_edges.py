@@ -175,7 +175,7 @@ def section_edges(quick):
             big = [(np.abs(r.color.astype(int) - g.color.astype(int)).max(-1) > 48) & ~edge_band(g.depth)
                    for r, g in zip(filled, truths)]
             off_all = [int(m.sum()) for m in big]
-            # the covered pixels as delivered: background rims beside holes recoloured by the fill
+            # the covered pixels as delivered: background rims beside their layer's gaps recoloured by the fill
             off_cov = [int((m & ~r.holes).sum()) for m, r in zip(big, filled)]
             print(f"{'':<8} {'  filled, all pixels':<22} {' '.join(f'{x:.2f}' for x in full):<24} {np.mean(full):6.2f} "
                   f"{'':>7} {str(off_all):>18}   covered: {off_cov}")

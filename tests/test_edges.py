@@ -426,7 +426,7 @@ def test_background_rim_beside_the_other_sources_pixels_is_marked_for_the_fill()
     (the pole-rim lines on the clutter pair's face, issue 11)."""
     from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite, source_trust
     from ibr.render.rasterize import SourceMaps
-    from ibr.render.view_synthesis import _rim_samples_beside_holes
+    from ibr.render.view_synthesis import _rim_samples_beside_gaps
 
     z = np.full((5, 8), 4.0, np.float32)
     z[:, 4:] = 1.0  # foreground on the right: column 3 is each source's background rim
@@ -455,7 +455,7 @@ def test_background_rim_beside_the_other_sources_pixels_is_marked_for_the_fill()
     assert exact.coverage.all() and fast.coverage.all()  # no hole anywhere
     np.testing.assert_array_equal(exact.replace, expected)
     np.testing.assert_array_equal(fast.replace, expected)
-    np.testing.assert_array_equal(_rim_samples_beside_holes(maps, [rim, rim]), expected)
+    np.testing.assert_array_equal(_rim_samples_beside_gaps(maps, [rim, rim]), expected)
 
 
 def test_ghost_outline_beside_a_disocclusion_is_gone_after_the_fill():

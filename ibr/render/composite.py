@@ -430,7 +430,7 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
     rims : sequence of (H_s, W_s) bool, optional
         Per source, its background rim (:func:`mixed_pixels` with ``side="far"``); with two
         sources, the trust scales the blend and :attr:`Composite.replace` marks the rim samples
-        beside a hole (as ``sample_composite`` with ``trust``). None: the trust channel is unused.
+        beside a pixel their layer does not cover (as ``sample_composite`` with ``trust``). None: the trust channel is unused.
     layers : sequence of (H, W, 4) uint8, optional
         Work arrays for the sampled layers (contents overwritten; default: new arrays).
 

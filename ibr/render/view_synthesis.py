@@ -64,8 +64,9 @@ class Rendering:
         Pixels that no source covered (before filling): every value there is invented.
     filled : (H, W) bool
         Pixels whose colour the fill wrote (previous frame or background fill): the holes it
-        filled and, beside them, covered pixels sampled from a source's background rim (their
-        colour mixed in the foreground; :attr:`~ibr.render.composite.Composite.replace`).
+        filled and covered pixels sampled from a source's background rim (their colour mixed in
+        the foreground) beside a hole or the other source's pixels
+        (:attr:`~ibr.render.composite.Composite.replace`).
     camera : Camera
         The target camera.
     t : float or None
@@ -323,11 +324,11 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
                      quantization=quant)
     if packed is None:
         return comp
-    replace = _rim_samples_beside_holes(maps, [t[..., 1] < 0 for t in packed])
+    replace = _rim_samples_beside_gaps(maps, [t[..., 1] < 0 for t in packed])
     return Composite(comp.color, comp.depth, comp.coverage, replace if replace.any() else None)
 
 
-def _rim_samples_beside_holes(maps, rims) -> np.ndarray:
+def _rim_samples_beside_gaps(maps, rims) -> np.ndarray:
     """(H, W) bool: target pixels that one layer alone covers with a sample whose nearest source
     pixel lies on that source's background rim (``rims``: per source, ``mixed_pixels(side="far")``),
     beside a pixel that layer does not cover: what the bilinear 8-bit path's kernel marks as
@@ -338,8 +339,10 @@ def _rim_samples_beside_holes(maps, rims) -> np.ndarray:
         alone = m.coverage & ~maps[1 - i].coverage
         ys, xs = np.nonzero(alone)
         h, w = r.shape
-        u = np.clip(np.floor(m.map_u[ys, xs] + 0.5), 0, w - 1).astype(np.intp)
-        v = np.clip(np.floor(m.map_v[ys, xs] + 0.5), 0, h - 1).astype(np.intp)
+        # the nearest pixel as the kernels round it: x + 0.5 in float64 (in float32 it rounds up
+        # from just below 0.5)
+        u = np.clip(np.floor(m.map_u[ys, xs].astype(np.float64) + 0.5), 0, w - 1).astype(np.intp)
+        v = np.clip(np.floor(m.map_v[ys, xs].astype(np.float64) + 0.5), 0, h - 1).astype(np.intp)
         rim = np.zeros(replace.shape, bool)
         rim[ys, xs] = r[v, u]
         replace |= rim_beside_holes(m.coverage, rim)
@@ -350,7 +353,7 @@ def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
     holes = ~comp.coverage
     color, depth = comp.color, comp.depth
     filled = np.zeros_like(holes)
-    # background-rim samples beside a hole: covered (the hole mask stays exact), but their colour
+    # background-rim samples beside their layer's gap: covered (the hole mask stays exact), but their colour
     # (foreground mixed in) is replaced by the fill's background estimate; their depth stays
     replace = comp.replace if comp.replace is not None and fill != "none" and comp.replace.any() else None
     if replace is not None and (holes | replace).all():  # no pixel left to fill from: rims stay

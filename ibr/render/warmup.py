@@ -13,7 +13,8 @@ when the main process reaches them it loads them from the cache instead. ``pytho
 ibr.render.warmup stitch`` (``stitch-ods``) does the same for ``ibr stitch`` (the ray rasterizer's
 setup, the plane fit, the N-source blend's accumulation into a spherical camera and the mono (ODS)
 panorama's hole fill; the main process compiles the ray raster kernel and the resolve itself),
-``... mesh`` for ``ibr mesh`` (the split's plane tests and the plane fit). Nothing
+``... mesh`` for ``ibr mesh`` (the split's callees that are functions of their own and the
+plane fit). Nothing
 here is needed for correctness: if the helper is slow or fails, the main process compiles what it
 needs itself.
 
@@ -83,7 +84,7 @@ def _tiny_mesh():
 
 def warm_stitch_kernels(marks: Path | None = None, eye_fill: str = "any") -> None:
     """The kernels ``ibr stitch`` runs after its segmentation, but two: the ray rasterizer's
-    setup (setup, bucketing, region; group "ray-setup"), the mesh's plane fit ("plane-fit"), the
+    setup (setup and region; group "ray-setup"), the mesh's plane fit ("plane-fit"), the
     blend's spherical accumulation ("blend") and the panorama's hole fill ("background-fill" for
     a mono panorama, ``eye_fill="any"``; "row-fill" for ODS eyes, ``"rows"``), on the tiny mesh
     and a small equirect ray camera. The ray raster kernel and the blend's resolve are left to the
