@@ -281,7 +281,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import info, note_first_run, progress
+    from commands._common import holes_summary, info, note_first_run, progress
     from ibr.io import load_view, write_image
     from ibr.io.outputs import OutputPlan, VIDEO_EXTS
     from commands._sequence import is_sequence_argument, run_interpolate  # sequences (#15)
@@ -362,8 +362,7 @@ def run(args) -> int:
             write_image(plan.stage(out, name + ext), color)
             if args.holes:
                 write_image(plan.stage(out, name + "_holes.png"), (frame.holes * 255).astype(np.uint8))
-            line = (f"frame {i + 1}/{len(ts)} t={t:.3f}: {dt * 1e3:6.1f} ms, holes {frame.hole_fraction:.3%} "
-                    f"(filled {frame.filled.mean():.3%})")
+            line = f"frame {i + 1}/{len(ts)} t={t:.3f}: {dt * 1e3:6.1f} ms, {holes_summary(frame)}"
             truth = next((p for tt, p in truth_paths.items() if abs(tt - t) < 1e-9), None)
             if truth is not None:
                 psnr, ssim = _metrics(*_comparable(frame.color, load_view(truth).color, truth))
@@ -390,10 +389,14 @@ def run(args) -> int:
         first += ", including loading the compiled kernels"
     # the first frame loads (or compiles) the kernels: the typical frame is the median of the rest
     per = np.median(times[1:]) if len(times) > 1 else times[0]
-    info(f"wrote {len(ts)} frames to {out}/ (median {per * 1e3:.1f} ms per frame, {first})")
+    info(f"wrote {len(ts)} frame{'s' if len(ts) != 1 else ''} to {out}/ (median {per * 1e3:.1f} ms per frame, {first})")
     if scores:
         p = np.array(scores)
-        info(f"ground truth: mean PSNR {p[:, 0].mean():.2f} dB, mean SSIM {p[:, 1].mean():.4f} over {len(p)} frames")
+        info(f"ground truth: mean PSNR {p[:, 0].mean():.2f} dB, mean SSIM {p[:, 1].mean():.4f} "
+             f"over {len(p)} frame{'s' if len(p) != 1 else ''}")
+    elif truth_paths:  # e.g. the bundled pair with --frames 6: no frame at a ground-truth position
+        at = ", ".join(f"{t:g}" for t in sorted(truth_paths))
+        info(f"ground truth: none at these t (its views are at t = {at}); no PSNR/SSIM")
     if video:
         info(f"wrote video {video}")
     if sheet:

@@ -67,7 +67,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import image_for, info, note_first_run
+    from commands._common import holes_summary, image_for, info, note_first_run
     from commands.interpolate import _to_float
     from ibr.base.view import View
     from ibr.io import load_view, write_depth, write_image
@@ -97,7 +97,7 @@ def run(args) -> int:
         result = warp(view, target, method=args.method, fill=args.fill, interpolation=args.interpolation,
                       supersample=args.supersample)
         dt = time.perf_counter() - t0
-        line = f"warp: {dt * 1e3:.1f} ms, holes {result.hole_fraction:.3%} (filled {result.filled.mean():.3%})"
+        line = f"warp: {dt * 1e3:.1f} ms, {holes_summary(result)}"
         if isinstance(target, View) and target.color.shape == result.color.shape and not result.holes.all():
             cov = ~result.holes  # the same PSNR as the whole image's (inf for an exact copy, was 200.00)
             covered_db = psnr(_to_float(result.color)[cov][None], _to_float(target.color)[cov][None])

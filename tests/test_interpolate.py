@@ -292,6 +292,35 @@ def test_cli_long_run_progress(tmp_path, capsys):
     assert len(list(tmp_path.glob("frame_*.png"))) == 11
 
 
+def test_cli_says_when_no_frame_lies_at_a_ground_truth_position(tmp_path, capsys):
+    """The bundled pair's truth views are at t = 0.25, 0.5, 0.75: six frames (t = 0, 0.2, ..
+    1) meet none of them, and the summary says so instead of leaving out PSNR/SSIM silently."""
+    code = cli.main(["interpolate", "--frames", "6", "--out", str(tmp_path), "--method", "forward", "--fill", "none"])
+    assert code == 0
+    err = capsys.readouterr().err
+    assert "ground truth: none at these t (its views are at t = 0.25, 0.5, 0.75); no PSNR/SSIM" in err
+    assert "PSNR" not in err.replace("no PSNR/SSIM", "") and "wrote 6 frames" in err
+
+
+def test_holes_summary_tells_filled_holes_from_recoloured_rim_pixels():
+    """More filled than hole pixels (the fill recolours background-rim pixels beside the holes)
+    is said in words; a frame left unfilled says so."""
+    from types import SimpleNamespace
+
+    from commands._common import holes_summary
+
+    holes = np.zeros((10, 100), bool)
+    holes[0, :5] = True  # 0.5 %
+    rim = np.zeros_like(holes)
+    rim[1, :2] = True  # 0.2 %
+    assert holes_summary(SimpleNamespace(holes=holes, filled=holes | rim)) == (
+        "holes 0.500% (filled 0.500%, and 0.200% rim pixels beside them recoloured)")
+    assert holes_summary(SimpleNamespace(holes=holes, filled=holes.copy())) == "holes 0.500% (filled 0.500%)"
+    assert holes_summary(SimpleNamespace(holes=holes, filled=np.zeros_like(holes))) == "holes 0.500% (not filled)"
+    none = np.zeros_like(holes)
+    assert holes_summary(SimpleNamespace(holes=none, filled=none)) == "holes 0.000%"
+
+
 def test_top_level_names_are_the_functions_whatever_was_imported_first():
     import subprocess
     import sys
