@@ -134,7 +134,8 @@ def _ssim(x, y, data_range: float = 1.0) -> float:
 
 
 def contact_sheet(images, labels, *, columns: int = 4, width: int = 256):
-    """One uint8 RGB image with the frames in a grid (scaled to ``width`` px) and a label each."""
+    """One uint8 RGB image with the frames in a grid of at most ``columns`` columns (as few as the
+    rows need, so the last row is as full as it can be), each scaled to ``width`` px and labelled."""
     import cv2
     import numpy as np
 
@@ -151,8 +152,8 @@ def contact_sheet(images, labels, *, columns: int = 4, width: int = 256):
         cv2.putText(tile, label, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
         cv2.putText(tile, label, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
         tiles.append(tile)
-    columns = max(1, min(columns, len(tiles)))
-    rows = -(-len(tiles) // columns)
+    rows = -(-len(tiles) // max(1, min(columns, len(tiles))))
+    columns = -(-len(tiles) // rows)  # as few columns as those rows need: 6 frames 3 x 2, not 4 + 2
     th = max(t.shape[0] for t in tiles)
     sheet = np.zeros((rows * th, columns * width, 3), np.uint8)
     for i, tile in enumerate(tiles):

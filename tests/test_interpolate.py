@@ -302,6 +302,20 @@ def test_cli_says_when_no_frame_lies_at_a_ground_truth_position(tmp_path, capsys
     assert "PSNR" not in err.replace("no PSNR/SSIM", "") and "wrote 6 frames" in err
 
 
+@pytest.mark.parametrize("n, grid", [(1, (1, 1)), (3, (1, 3)), (4, (1, 4)), (5, (2, 3)), (6, (2, 3)), (7, (2, 4)),
+                                     (9, (3, 3)), (11, (3, 4))])
+def test_contact_sheet_grid_leaves_as_few_empty_cells_as_its_rows_allow(n, grid):
+    from commands.interpolate import contact_sheet
+
+    frames = [np.full((48, 64, 3), 40 + 10 * i, np.uint8) for i in range(n)]
+    sheet = contact_sheet(frames, [f"t={i}" for i in range(n)], width=64)
+    rows, cols = grid
+    assert sheet.shape == (rows * 48, cols * 64, 3)
+    for i in range(n):  # each frame in its cell, row by row (the label covers the top-left corner)
+        r, c = divmod(i, cols)
+        assert (sheet[r * 48 + 40, c * 64 + 60] == 40 + 10 * i).all()
+
+
 def test_holes_summary_tells_filled_holes_from_recoloured_rim_pixels():
     """More filled than hole pixels (the fill recolours background-rim pixels beside the holes)
     is said in words; a frame left unfilled says so."""
