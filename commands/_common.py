@@ -17,18 +17,19 @@ def info(message: str) -> None:
 
 
 def holes_summary(rendering) -> str:
-    """``holes 0.124% (filled 0.124%, and 0.069% rim pixels beside them recoloured)`` for an
+    """``holes 0.124% (filled 0.124%, and 0.069% covered pixels beside them recoloured)`` for an
     :class:`ibr.Rendering`: the share of pixels no source covered, how many of them the fill
-    wrote, and the covered background-rim pixels it recoloured beside them (a silhouette's mixed
-    colour left where the foreground moved away, ``Rendering.filled``), so that more filled than
-    hole pixels does not read as a mistake; ``(not filled)`` with ``--fill none``."""
+    wrote, and the covered pixels it recoloured beside them (``Rendering.filled``: a silhouette's
+    mixed colour left where the foreground moved away, a stray sample torn from its neighbours),
+    so that more filled than hole pixels does not read as a mistake; ``(not filled)`` with
+    ``--fill none``."""
     holes, filled = rendering.holes, rendering.filled
     text = f"holes {holes.mean():.3%}"
     if not filled.any():
         return text + (" (not filled)" if holes.any() else "")
     rim = (filled & ~holes).mean()
     text += f" (filled {(filled & holes).mean():.3%}"
-    return text + (f", and {rim:.3%} rim pixels beside them recoloured)" if rim else ")")
+    return text + (f", and {rim:.3%} covered pixels beside them recoloured)" if rim else ")")
 
 
 def progress(items: Iterable[T], total: int, label: str) -> Iterator[T]:

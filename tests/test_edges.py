@@ -459,6 +459,34 @@ def test_background_rim_beside_the_other_sources_pixels_is_marked_for_the_fill()
     np.testing.assert_array_equal(_rim_samples_beside_gaps(maps, [rim, rim]), expected)
 
 
+def test_a_stray_sample_inside_a_hole_is_recoloured_and_a_lone_source_pixel_kept():
+    """A far pixel beside a near block in the source (a depth outlier, as in real disparity maps)
+    stays where it was when the camera moves, while the block moves 10 px away: alone in the
+    target, it is recoloured by the fill (covered, its depth kept). A far pixel that is alone in
+    its source too (no neighbour has depth) is what the source recorded and keeps its colour; with
+    ``fill="none"`` nothing is recoloured."""
+    h, w = 40, 50
+    cam = Camera(50.0, 50.0, (w - 1) / 2, (h - 1) / 2, w, h)
+    depth = np.full((h, w), np.nan, np.float32)
+    depth[10:30, 10:30] = 2.0
+    depth[20, 30] = depth[5, 40] = 1000.0  # beside the block / alone
+    color = np.zeros((h, w, 3), np.uint8)
+    color[10:30, 10:30] = color[5, 40] = 100  # what the fill has to draw from: 100 everywhere
+    color[20, 30] = 250
+    pose = np.eye(4)
+    pose[0, 3] = 0.4  # the block (z = 2) moves 10 px, the far pixels 0.02 px
+    target = Camera(50.0, 50.0, (w - 1) / 2, (h - 1) / 2, w, h, pose)
+    view = View(color, depth, cam, "outlier")
+    raw = warp(view, target, fill="none")
+    assert not raw.holes[20, 30] and not raw.holes[5, 40] and raw.holes[19:22, 29:32].sum() == 8
+    assert raw.color[20, 30].min() > 200 and not raw.filled.any()
+    r = warp(view, target)
+    assert not r.holes[20, 30] and r.filled[20, 30] and r.depth[20, 30] == raw.depth[20, 30]
+    assert abs(int(r.color[20, 30, 0]) - 100) <= 10  # recoloured from the covered pixels around
+    assert not r.filled[5, 40] and (r.color[5, 40] == raw.color[5, 40]).all()
+    np.testing.assert_array_equal(r.holes, raw.holes)  # the hole mask stays exact
+
+
 def test_ghost_outline_beside_a_disocclusion_is_gone_after_the_fill():
     """Clutter t = 0.75: behind the pole a disocclusion opens on the face; the background rim of
     the pole in the source (dark, pole colour mixed in) lay along it as a dark sliver. With

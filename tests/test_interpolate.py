@@ -12,7 +12,8 @@ import pytest
 import cli
 import ibr
 from ibr.base.camera import Camera, look_at
-from ibr.render.view_synthesis import Rendering, _lod_options, _source_maps, interpolate, source_mesh, warp
+from ibr.render.view_synthesis import (Rendering, _lod_options, _source_maps, _stray_samples, interpolate,
+                                      source_mesh, warp)
 from ibr.io import load_view, read_image, save_view
 from ibr.base.view import View
 from samples import DATA_DIR
@@ -101,7 +102,8 @@ def test_sequence_previous_fill_and_mesh_cache(room, monkeypatch):
         same = (cur.color[h] == prev.color[h]).all(-1) & (cur.depth[h] == prev.depth[h])
         assert (same | (prev.depth[h] < cur.depth[h])).all()
         # beyond the holes the fill recolours only background-rim samples of one layer alone,
-        # each beside a pixel that layer does not cover (a hole or the other layer's pixels)
+        # each beside a pixel that layer does not cover (a hole or the other layer's pixels), and
+        # stray samples (none in this scene)
         extra = cur.filled & ~cur.holes
         cams = [f.camera for f in frames]
         opts = [_lod_options(v, cams, {}, "move") for v in (fresh_a, fresh_b)]
@@ -115,6 +117,8 @@ def test_sequence_previous_fill_and_mesh_cache(room, monkeypatch):
             beside[:, 1:] |= gap[:, :-1]
             beside[:, :-1] |= gap[:, 1:]
             allowed |= own & ~other & beside
+        assert _stray_samples(_source_maps((fresh_a, fresh_b), cur.camera, "mesh", "free", "", opts),
+                              (fresh_a, fresh_b), ~cur.holes) is None
         assert not (extra & ~allowed).any() and extra.mean() < 0.01
     none = interpolate(fresh_a, fresh_b, [0.2, 0.4], fill="none")
     kept = ~frames[1].filled
@@ -316,8 +320,8 @@ def test_contact_sheet_grid_leaves_as_few_empty_cells_as_its_rows_allow(n, grid)
         assert (sheet[r * 48 + 40, c * 64 + 60] == 40 + 10 * i).all()
 
 
-def test_holes_summary_tells_filled_holes_from_recoloured_rim_pixels():
-    """More filled than hole pixels (the fill recolours background-rim pixels beside the holes)
+def test_holes_summary_tells_filled_holes_from_recoloured_covered_pixels():
+    """More filled than hole pixels (the fill recolours background-rim and stray pixels beside the holes)
     is said in words; a frame left unfilled says so."""
     from types import SimpleNamespace
 
@@ -328,7 +332,7 @@ def test_holes_summary_tells_filled_holes_from_recoloured_rim_pixels():
     rim = np.zeros_like(holes)
     rim[1, :2] = True  # 0.2 %
     assert holes_summary(SimpleNamespace(holes=holes, filled=holes | rim)) == (
-        "holes 0.500% (filled 0.500%, and 0.200% rim pixels beside them recoloured)")
+        "holes 0.500% (filled 0.500%, and 0.200% covered pixels beside them recoloured)")
     assert holes_summary(SimpleNamespace(holes=holes, filled=holes.copy())) == "holes 0.500% (filled 0.500%)"
     assert holes_summary(SimpleNamespace(holes=holes, filled=np.zeros_like(holes))) == "holes 0.500% (not filled)"
     none = np.zeros_like(holes)

@@ -291,10 +291,25 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
             depth_tol, dtype, silhouettes=False):
     """Render one or two sources into ``camera`` and composite them (output arrays are fresh).
     ``mesh_options``: one dict per view. ``silhouettes``: mixed silhouette pixels of each
-    source get low trust where the two layers agree (:func:`~ibr.render.composite.source_trust`)."""
+    source get low trust where the two layers agree (:func:`~ibr.render.composite.source_trust`).
+    :attr:`Composite.replace` marks the covered pixels the fill should recolour: background-rim
+    samples beside their layer's gap and stray samples (:func:`_stray_samples`)."""
     maps = _source_maps(views, camera, method, footprint, splat, mesh_options)
     if not any(m.coverage.any() for m in maps):
         return None
+    comp = _composite_maps(views, maps, camera, weights, method=method, mesh_options=mesh_options,
+                           interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
+                           dtype=dtype, silhouettes=silhouettes)
+    stray = _stray_samples(maps, views, comp.coverage)
+    if stray is None:
+        return comp
+    return Composite(comp.color, comp.depth, comp.coverage, stray if comp.replace is None else comp.replace | stray)
+
+
+def _composite_maps(views, maps, camera, weights, *, method, mesh_options, interpolation, composite_mode, depth_tol,
+                    dtype, silhouettes):
+    """The composite of :func:`_render` from the sources' ``maps`` (by the 8-bit, the float or the
+    bicubic path)."""
     keys = [_mesh_key(o) if method == "mesh" else None for o in mesh_options]
     use_trust = silhouettes and len(views) == 2
     quant = [o.get("quantization") if o.get("quantization") is not None else quantization_of(v)
@@ -326,6 +341,40 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
         return comp
     replace = _rim_samples_beside_gaps(maps, [t[..., 1] < 0 for t in packed])
     return Composite(comp.color, comp.depth, comp.coverage, replace if replace.any() else None)
+
+
+#: A pixel's eight neighbours (the centre left out): dilating with it gives, per pixel, whether
+#: any neighbour is set.
+_RING = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], np.uint8)
+
+
+def _stray_samples(maps, views, coverage) -> np.ndarray | None:
+    """(H, W) bool, or None when there are none: covered target pixels none of whose eight
+    neighbours is covered (a speck inside a hole) whose source pixel, in every layer covering it,
+    has a valid neighbour in its source. The warp tore such a sample from its neighbours: its
+    depth disagrees with theirs, as a real depth map's outliers do (the Middlebury motorcycle:
+    0.11 % of the right view, dark dots of the fork scattered over the disocclusion beside it),
+    so the fill recolours it as it does a background-rim sample (its depth stays). A pixel that
+    is alone in its source too (every neighbour without depth) is what the source recorded, and
+    stays: a source is given back unchanged at its own pose."""
+    import cv2
+
+    cov = np.ascontiguousarray(coverage).view(np.uint8)
+    alone = cv2.compare(cov, cv2.dilate(cov, _RING), cv2.CMP_GT)  # covered, no covered neighbour
+    if not cv2.countNonZero(alone):  # (uint8 OpenCV calls: 0.02 ms at 512 x 384, numpy took 0.3)
+        return None
+    ys, xs = np.nonzero(alone)
+    keep = np.zeros(ys.size, bool)
+    for m, view in zip(maps, views):
+        on = m.coverage[ys, xs]
+        h, w = view.depth.shape
+        u = np.clip(np.floor(m.map_u[ys[on], xs[on]].astype(np.float64) + 0.5), 0, w - 1).astype(np.intp)
+        v = np.clip(np.floor(m.map_v[ys[on], xs[on]].astype(np.float64) + 0.5), 0, h - 1).astype(np.intp)
+        valid = (view.depth > 0).view(np.uint8)  # NaN where a view has no depth
+        keep[np.flatnonzero(on)] |= cv2.dilate(valid, _RING)[v, u] == 0
+    stray = np.zeros(coverage.shape, bool)
+    stray[ys[~keep], xs[~keep]] = True
+    return stray if stray.any() else None
 
 
 def _rim_samples_beside_gaps(maps, rims) -> np.ndarray:
