@@ -95,6 +95,11 @@ class Rendering:
         return View(self.color, self.depth, self.camera, name)
 
 
+#: A pixel's eight neighbours (the centre left out): dilating with it gives, per pixel, whether
+#: any neighbour is set.
+_RING = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], np.uint8)
+
+
 # ------------------------------------------------------------------------- source cache
 class _Source:
     """Per-view cache: the color as the numba sampler reads it, a float32 copy for ``cv2.remap``
@@ -110,6 +115,18 @@ class _Source:
         self.any_valid = None  # some finite depth (_check_source)
         self._view = weakref.ref(view)
         self._upsampled: dict = {}
+        self._lone = None
+
+    @property
+    def lone(self) -> np.ndarray:
+        """(H, W) bool: pixels with depth none of whose eight neighbours has depth (made once)."""
+        if self._lone is None:
+            import cv2
+
+            valid = np.ascontiguousarray(self._depth > 0).view(np.uint8)  # NaN where a view has no depth
+            self._lone = (valid > cv2.dilate(valid, _RING))
+            self._lone.setflags(write=False)
+        return self._lone
 
     def upsampled(self, k: int) -> View:
         """The source at k x k its resolution with sub-pixel silhouettes
@@ -343,11 +360,6 @@ def _composite_maps(views, maps, camera, weights, *, method, mesh_options, inter
     return Composite(comp.color, comp.depth, comp.coverage, replace if replace.any() else None)
 
 
-#: A pixel's eight neighbours (the centre left out): dilating with it gives, per pixel, whether
-#: any neighbour is set.
-_RING = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], np.uint8)
-
-
 def _stray_samples(maps, views, coverage) -> np.ndarray | None:
     """(H, W) bool, or None when there are none: covered target pixels none of whose eight
     neighbours is covered (a speck inside a hole) whose source pixel, in every layer covering it,
@@ -366,12 +378,9 @@ def _stray_samples(maps, views, coverage) -> np.ndarray | None:
     ys, xs = np.nonzero(alone)
     keep = np.zeros(ys.size, bool)
     for m, view in zip(maps, views):
-        on = m.coverage[ys, xs]
-        h, w = view.depth.shape
-        u = np.clip(np.floor(m.map_u[ys[on], xs[on]].astype(np.float64) + 0.5), 0, w - 1).astype(np.intp)
-        v = np.clip(np.floor(m.map_v[ys[on], xs[on]].astype(np.float64) + 0.5), 0, h - 1).astype(np.intp)
-        valid = (view.depth > 0).view(np.uint8)  # NaN where a view has no depth
-        keep[np.flatnonzero(on)] |= cv2.dilate(valid, _RING)[v, u] == 0
+        on = np.flatnonzero(m.coverage[ys, xs])
+        lone = _source(view).lone
+        keep[on] |= lone[_nearest_source_pixel(m, ys[on], xs[on], lone.shape)]
     stray = np.zeros(coverage.shape, bool)
     stray[ys[~keep], xs[~keep]] = True
     return stray if stray.any() else None
@@ -387,15 +396,20 @@ def _rim_samples_beside_gaps(maps, rims) -> np.ndarray:
     for i, (m, r) in enumerate(zip(maps, rims)):
         alone = m.coverage & ~maps[1 - i].coverage
         ys, xs = np.nonzero(alone)
-        h, w = r.shape
-        # the nearest pixel as the kernels round it: x + 0.5 in float64 (in float32 it rounds up
-        # from just below 0.5)
-        u = np.clip(np.floor(m.map_u[ys, xs].astype(np.float64) + 0.5), 0, w - 1).astype(np.intp)
-        v = np.clip(np.floor(m.map_v[ys, xs].astype(np.float64) + 0.5), 0, h - 1).astype(np.intp)
         rim = np.zeros(replace.shape, bool)
-        rim[ys, xs] = r[v, u]
+        rim[ys, xs] = r[_nearest_source_pixel(m, ys, xs, r.shape)]
         replace |= rim_beside_holes(m.coverage, rim)
     return replace
+
+
+def _nearest_source_pixel(maps, ys, xs, shape) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, columns) of the source pixel nearest to where target pixels (ys, xs) sample their
+    source (``maps``), clamped to its ``shape``; rounded as the composite kernels round
+    (``_nearest``): x + 0.5 in float64 (in float32 it rounds up from just below 0.5)."""
+    h, w = shape
+    u = np.clip(np.floor(maps.map_u[ys, xs].astype(np.float64) + 0.5), 0, w - 1).astype(np.intp)
+    v = np.clip(np.floor(maps.map_v[ys, xs].astype(np.float64) + 0.5), 0, h - 1).astype(np.intp)
+    return v, u
 
 
 def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
