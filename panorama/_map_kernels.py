@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from ibr.base.jit import njit, prange
 
 __all__: list[str] = []
 

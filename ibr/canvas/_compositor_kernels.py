@@ -11,7 +11,7 @@ affine in the target pixel (u, v).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from ..base.jit import njit, prange
 
 __all__: list[str] = []
 

@@ -8,7 +8,7 @@ All kernels take C-contiguous arrays; invalid depth is NaN in the float inputs. 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..base.jit import njit
 
 #: Pixels sampled along each line by :func:`crease_split` (at most about this many).
 CREASE_SAMPLES = 32

@@ -7,7 +7,7 @@ border pixels.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from ..base.jit import njit, prange
 
 __all__: list[str] = []
 

@@ -7,7 +7,7 @@ reference below that the tests compare against.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..base.jit import njit
 
 __all__: list[str] = []
 

@@ -6,7 +6,7 @@ Private, no validation. Pixel centers at integer coordinates.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from ..base.jit import njit, prange
 
 __all__: list[str] = []
 

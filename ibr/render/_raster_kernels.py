@@ -26,7 +26,7 @@ pixel exactly once (no crack, no double cover) -- the source-space equivalent of
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from ..base.jit import njit, prange
 
 __all__: list[str] = []
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from ..base.jit import njit
 
 __all__: list[str] = []
 

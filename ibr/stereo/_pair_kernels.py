@@ -11,7 +11,7 @@ Dz = 0, so rows are preserved exactly: v' = v).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..base.jit import njit
 
 __all__: list[str] = []
 
