@@ -373,9 +373,12 @@ def _stray_samples(maps, views, coverage) -> np.ndarray | None:
 
     cov = np.ascontiguousarray(coverage).view(np.uint8)
     alone = cv2.compare(cov, cv2.dilate(cov, _RING), cv2.CMP_GT)  # covered, no covered neighbour
-    if not cv2.countNonZero(alone):  # (uint8 OpenCV calls: 0.02 ms at 512 x 384, numpy took 0.3)
+    # (uint8 OpenCV calls: 0.02 ms at 512 x 384, numpy took 0.3; cv2.findNonZero lists the
+    # pixels row by row in 0.1 ms at 741 x 500, np.nonzero took 0.73)
+    found = cv2.findNonZero(alone)  # (N, 2) or (N, 1, 2) int32 (x, y), or None
+    if found is None:
         return None
-    ys, xs = np.nonzero(alone)
+    xs, ys = found.reshape(-1, 2).T
     keep = np.zeros(ys.size, bool)
     for m, view in zip(maps, views):
         on = np.flatnonzero(m.coverage[ys, xs])
