@@ -225,3 +225,26 @@ def test_layers_one_quantization_code_apart_blend():
     np.testing.assert_allclose(quant.color[0, :, 0], [150.0, 200.0])  # blended / still z-tested
     with pytest.raises(TypeError, match="quantization: expected an ibr.base.depth.DepthQuantization"):
         composite([a, b], [0.5, 0.5], quantization=0.5)
+
+
+@pytest.mark.parametrize("options", [{}, {"interpolation": "cubic"}, {"float_color": True}])
+def test_view_synthesis_never_reads_the_maps_of_uncovered_pixels(monkeypatch, options):
+    """View synthesis writes uncovered pixels' map coordinates inside the source (so that
+    cv2.remap skips its border path, #13): every sampler must read only covered pixels' maps, so
+    the frames are the same as with coordinates far off the source (the 8-bit, the cubic and
+    the float-colour paths; the motorcycle warp has 16 % uncovered pixels)."""
+    from ibr.base.view import View
+    from ibr.io.middlebury import motorcycle_views
+    from ibr.render import view_synthesis as vs
+    from ibr.render.rasterize import _FAR
+
+    left, right = motorcycle_views()
+    opts = dict(options)
+    if opts.pop("float_color", False):
+        left = View(left.color.astype(np.float32) / 255, left.depth, left.camera)
+    inside = vs.warp(left, right.camera, fill="none", **opts)
+    monkeypatch.setattr(vs, "_UNCOVERED_COORD", _FAR)
+    far = vs.warp(left, right.camera, fill="none", **opts)
+    assert 0.1 < inside.holes.mean() < 0.25  # many uncovered pixels
+    np.testing.assert_array_equal(inside.holes, far.holes)
+    np.testing.assert_array_equal(inside.color, far.color)

@@ -208,12 +208,13 @@ def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out:
 
 
 def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: float, outs,
-                         crack_rel: float = 0.0) -> list:
+                         crack_rel: float = 0.0, far_coord: np.float32 = _FAR) -> list:
     """:func:`_rasterize_into` for several meshes into the same camera, their bands of rows run
     in one pass of the band pool (one dispatch, and the pieces of all meshes balance out).
     ``crack_rel`` > 0: one-pixel cracks along rows between same-surface pixels are closed
     (``_raster_kernels.raster_quads``; view synthesis, not the exact coverage of
-    :func:`rasterize_mesh`)."""
+    :func:`rasterize_mesh`). ``far_coord`` (float32): the map coordinates of uncovered pixels
+    (:data:`_FAR`, off the source, unless the caller reads only covered pixels' maps)."""
     check_choice("footprint", footprint, FOOTPRINTS)
     depth_tol = check_positive("depth_tol", depth_tol)
     if not isinstance(camera, Camera):
@@ -234,7 +235,7 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
         flags = _clamp_flags(mesh, footprint, depth_tol)
         start, order = _k.bucket_bands(bbox, h, _nbands(h))
         qop = mesh.quad_of_pixel if crack_rel > 0 else _NO_QOP
-        jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, _FAR,
+        jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, far_coord,
                                              float(crack_rel), qop, out.depth, out.map_u, out.map_v,
                                              out.coverage)))
         first += len(start) - 1
