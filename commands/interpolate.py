@@ -297,6 +297,9 @@ def run(args) -> int:
         if args.scene:
             raise ValueError("--scene: only used without view files")
         path_a, path_b = map(Path, args.views)
+    elif len(args.views) == 1 and not Path(args.views[0]).exists():  # a mistyped sequence or view file
+        raise FileNotFoundError(f"SEQ: file not found: {args.views[0]} (one argument is a sequence: a manifest "
+                                "or a folder of numbered views; a pair needs two view files)")
     else:
         raise ValueError(f"views: expected two view files A.json B.json (or none), got {len(args.views)}")
     # the sequence options would be silently ignored for a pair (or the bundled pair)

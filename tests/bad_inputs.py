@@ -377,6 +377,8 @@ _add("interpolate --frames 10^9", U, "usage", r"argument --frames: .*<= 100000",
 _add("interpolate --t nan", U, "usage", r"argument --t: expected a finite number", argv=("interpolate", "--t", "nan"))
 _add("interpolate --t x", U, "usage", r"argument --t: expected a number, got 'x'", argv=("interpolate", "--t", "x"))
 _add("interpolate one view", C, "error", r"views: expected two view files", argv=("interpolate", "{d}/a.json"))
+_add("interpolate mistyped sequence", C, "error", r"SEQ: file not found: .*nope\.json",
+     argv=("interpolate", "{d}/seq/nope.json", "--factor", "4"))
 _add("interpolate three views", C, "error", r"views: expected two view files", argv=("interpolate", "{d}/a.json", "{d}/b.json",
      "{d}/a.json"))
 _add("interpolate --scene with views", C, "error", r"--scene: only used without view files",
