@@ -455,13 +455,37 @@ def add_samples_arguments(parser) -> None:
                    help="write a camera path through a synthetic scene: key views (SCENE_walk.json) and the exact "
                         "frames of their up-conversion by --factor (SCENE_truth.json, the ground truth)")
     d = SAMPLES_SEQUENCE_DEFAULTS
-    g.add_argument("--scene", default=d["scene"], help="synthetic scene of the sequence (default: %(default)s)")
+    g.add_argument("--scene", type=_scene_argument, default=d["scene"],
+                   help="synthetic scene of the sequence (default: %(default)s)")
     g.add_argument("--keys", type=number_in(2, 10000, integer=True, what="a number of key views"), default=d["keys"],
                    help="number of key views (default: %(default)s)")
     g.add_argument("--factor", type=FACTOR, default=d["factor"],
                    help="up-conversion factor of the ground truth (default: %(default)s)")
-    g.add_argument("--size", default=d["size"], metavar="WxH", help="image size (default: %(default)s)")
+    g.add_argument("--size", type=_size_argument, default=d["size"], metavar="WxH",
+                   help="image size (default: %(default)s)")
     g.add_argument("--fps", type=frame_rate, default=d["fps"], help="frame rate of the key views (default: %(default)s)")
+
+
+def _scene_argument(name: str) -> str:
+    """argparse type of ``--scene``: a scene of :data:`ibr.synth.SCENES` (else exit 2, as a bad choice)."""
+    import argparse
+
+    from ibr.synth import SCENES
+
+    if name not in SCENES:
+        raise argparse.ArgumentTypeError(f"expected one of {', '.join(SCENES)}, got {name!r}")
+    return name
+
+
+def _size_argument(text: str) -> str:
+    """argparse type of ``--size``: WxH as :func:`_size` reads it (else exit 2, a malformed value)."""
+    import argparse
+
+    try:
+        _size(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("--size: ")) from None
+    return text
 
 
 def _size(text: str) -> tuple[int, int]:

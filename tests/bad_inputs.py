@@ -372,6 +372,10 @@ _add("interpolate --fps nan", U, "usage", r"argument --fps: expected a finite nu
 _add("interpolate --fps inf", U, "usage", r"argument --fps: expected a finite number", argv=("interpolate", "--fps", "inf"))
 _add("interpolate --frames 0", U, "usage", r"argument --frames: expected a number of frames >= 1", argv=("interpolate", "--frames", "0"))
 _add("interpolate --frames -3", U, "usage", r"argument --frames", argv=("interpolate", "--frames", "-3"))
+_add("samples --sequence --scene unknown", U, "usage", r"argument --scene: expected one of room, .*got 'kitchen'",
+     argv=("samples", "--sequence", "--scene", "kitchen"))
+_add("samples --sequence --size 160x", U, "usage", r"argument --size: expected WxH .*got '160x'",
+     argv=("samples", "--sequence", "--size", "160x"))
 _add("interpolate --frames 2.5", U, "usage", r"argument --frames: expected an integer", argv=("interpolate", "--frames", "2.5"))
 _add("interpolate --frames 10^9", U, "usage", r"argument --frames: .*<= 100000", argv=("interpolate", "--frames", "1000000000"))
 _add("interpolate --t nan", U, "usage", r"argument --t: expected a finite number", argv=("interpolate", "--t", "nan"))
