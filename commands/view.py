@@ -98,6 +98,24 @@ def _write_animation(path: Path, frames, fps: float) -> None:
             writer.release()
 
 
+def _read_mono(args):
+    """(pano, layout) of a mono PANO; an image of no cube layout that an ODS pair's shape fits
+    (1:1 top-bottom, 4:1 side by side) is pointed to ``--stereo``."""
+    import re
+
+    from commands._common import read_panorama_arg
+
+    try:
+        return read_panorama_arg(args.pano, args.layout, "--layout")
+    except ValueError as exc:
+        size = re.search(r"cannot tell the layout of a (\d+) x (\d+) image", str(exc))
+        pair = {1: "top-bottom", 4: "sbs"}.get(int(size[1]) // int(size[2])) if size and \
+            int(size[1]) % int(size[2]) == 0 else None
+        if pair is None:
+            raise
+        raise ValueError(f"{exc}; or, if it is an ODS pair (ibr stitch --stereo ods), --stereo {pair}") from None
+
+
 def split_stereo(pano, mode: str):
     """(left, right) equirect eyes of an ODS pair packed ``top-bottom`` or ``sbs`` (PANO's message)."""
     from panorama.viewer import split_stereo as split
@@ -333,7 +351,7 @@ def run(args) -> int:
             eyes = split_stereo(read_image(args.pano, what="PANO"), args.stereo)
             pano, layout = eyes[0], "equirect"
         else:
-            eyes, (pano, layout) = None, read_panorama_arg(args.pano, args.layout, "--layout")
+            eyes, (pano, layout) = None, _read_mono(args)
             eight_bit = args.tour is not None or out.suffix.lower() in (".png", ".jpg", ".jpeg")
             if eight_bit:  # before any view is rendered
                 tour = args.tour is not None

@@ -56,6 +56,7 @@ def make_base(folder: Path) -> Path:
     rng[10, 10] = -1.0
     write_image(folder / "range_neg.exr", rng)
     write_image(folder / "notpano.png", np.zeros((37, 100, 3), np.uint8))
+    write_image(folder / "square.png", np.zeros((64, 64, 3), np.uint8))  # an ODS pair's shape (top-bottom)
     (folder / "poses.json").write_text(json.dumps([cb.world_from_cam.tolist(), ca.world_from_cam.tolist()]))
     (folder / "notes.txt").write_text("not an image\n")
     (folder / "sub").mkdir()
@@ -490,6 +491,8 @@ _add("cubemap --depth to .png", C, "error", r"-o: depth is float", argv=("cubema
 _add("cubemap --ext .bmp", C, "error", r"--ext: expected one of", argv=("cubemap", "{d}/pano.png", "-o", "{d}/faces",
      "--ext", ".bmp"))
 _add("cubemap input missing", C, "error", r"pano: file or folder not found", argv=("cubemap", "{d}/nope.png", "-o", "{d}/c.png"))
+_add("view a square image (an ODS pair?)", C, "error", r"cannot tell the layout of a 64 x 64 image.*--stereo top-bottom",
+     argv=("view", "{d}/square.png", "-o", "{d}/v.png"))
 _add("cubemap input not a panorama shape", C, "error", r"cannot tell the layout|layout", argv=("cubemap", "{d}/notpano.png",
      "-o", "{d}/c.png"))
 _add("cubemap face folder missing a face", C, "error", r"no face file nz", argv=("cubemap", "{d}/faces", "-o", "{d}/e.png"),
