@@ -62,11 +62,12 @@ def run(args) -> int:
             raise RuntimeError('--scheduler: Dask is not installed; pip install "ibr[dask]" '
                                '(or "dask[distributed]")') from None
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else "the local pool"
-    info(f"batch: {len(jobs)} jobs from {jobs_path} on {where}; records in {records}")
+    info(f"batch: {len(jobs)} job{'s' if len(jobs) != 1 else ''} from {jobs_path} on {where}; records in {records}")
     bar = Progress(len(jobs), "batch", unit="jobs")
 
     def on_result(res):
-        note = "" if res["status"] != "failed" else f"({res['id']} failed: {res['error'].splitlines()[-1:]})"
+        last = (res.get("error") or "").strip().splitlines()[-1:] or ["no message"]
+        note = "" if res["status"] != "failed" else f"({res['id']} failed: {last[0]})"
         bar.step(note=note)
 
     report = run_batch(jobs, records=records, scheduler=args.scheduler, workers=args.workers,

@@ -118,7 +118,7 @@ def run(args) -> int:
             if done == total:
                 info(f"stitch-photos: {step} done ({time.perf_counter() - start:.1f}s)")
 
-        info(f"stitch-photos: {len(images)} photos")
+        info(f"stitch-photos: {len(images)} photo{'s' if len(images) != 1 else ''}")
         result = panorama.stitch_photos(
             images, width=args.width, names=names, focal_px=args.focal, detector=args.detector,
             conf_thresh=args.conf, wave_correct=not args.no_level, reference=args.reference,

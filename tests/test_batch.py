@@ -88,6 +88,7 @@ def test_load_jobs_infers_outputs_and_refuses_bad_files(tmp_path):
     cases = [
         ([{"argv": ["stereo", "a.json"]}], "no output found"),
         ([{"argv": ["batch", "x.json", "-o", "y"]}], "cannot run 'ibr batch'"),
+        ([{"argv": ["view", "p.png", "--serve", "--site", "s"]}], r"ibr view --serve serves a page until .* --site DIR"),
         ([{"id": "x", "argv": ["warp", "a", "-o", "p.png"]}, {"id": "x", "argv": ["warp", "b", "-o", "q.png"]}],
          "id 'x'"),
         ([{"argv": ["warp", "a", "-o", "p.png"]}, {"argv": ["warp", "b", "-o", "./p.png"]}], "also an output"),

@@ -67,7 +67,7 @@ class BatchReport:
     def table(self, *, max_rows: int = 40) -> str:
         """A plain-text summary: totals, then the failed jobs (all of them) and the slowest done ones."""
         done = [r for r in self.results if r["status"] == "done"]
-        lines = [f"batch: {len(self.results)} jobs on {self.where} in {self.seconds:.1f} s: "
+        lines = [f"batch: {len(self.results)} job{'s' if len(self.results) != 1 else ''} on {self.where} in {self.seconds:.1f} s: "
                  f"{self.counts['done']} done, {self.counts['skipped']} skipped (up to date), "
                  f"{self.counts['failed']} failed"]
         if done:

@@ -240,6 +240,9 @@ def _job_from(entry, index: int, base: Path, parser=None) -> Job:
     if argv[0] == "batch":
         raise ValueError(f"{where}: a batch job cannot run 'ibr batch'")
     args = _parse(parser, argv, where) if parser is not None else None
+    if getattr(args, "serve", False) or (args is None and "--serve" in argv):  # it would run until killed
+        raise ValueError(f"{where}: ibr {argv[0]} --serve serves a page until it is stopped, which a batch job cannot "
+                         "do; write the page with --site DIR alone")
     outputs = entry.get("outputs")
     if outputs is None:
         outputs = _parsed_outputs(parser, args, argv) if parser is not None else _infer_outputs(argv)
