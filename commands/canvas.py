@@ -150,6 +150,18 @@ def _write(path, img, plan, name=None):
     write_image(plan.stage(path, name) if name else plan.stage(path), image_for(path, img))
 
 
+def _note_unseen(target, img) -> None:
+    """Say so when the canvas changed no pixel of the output (it was written anyway: the scene)."""
+    import numpy as np
+
+    from commands._common import info
+
+    scene = target.view.color if target.is_view else target.pano
+    if np.shape(img) == np.shape(scene) and np.array_equal(img, scene):
+        info("canvas: the canvas covers no pixel of the output (behind the camera, outside the field of view or "
+             "hidden behind the scene's depth), so the output is the scene unchanged; check --center and --normal")
+
+
 def _note_back_side(geo, viewpoint) -> None:
     """Say so when the viewpoint sees the canvas from behind: a canvas has two faces and is drawn
     mirrored from its back (a user who gave the opposite --normal saw mirrored text, no word)."""
@@ -212,7 +224,9 @@ def run(args) -> int:
             img = read_image(args.image, what="--image")
             canvas = C.canvas_from_image(img, resolution=args.resolution, power_of_two=args.power_of_two,
                                          name=Path(args.image).name, **geo)
-            _write_still(plan, out, target.render([canvas]), face_folder)
+            img = target.render([canvas])
+            _note_unseen(target, img)
+            _write_still(plan, out, img, face_folder)
             info(f"canvas: {canvas!r} -> {out}")
         elif args.strokes is not None:
             doc = _strokes_doc(args.strokes)
@@ -239,7 +253,9 @@ def run(args) -> int:
                     raise ValueError(f"--strokes: strokes[{i}]: {exc}") from None
             if painted == 0:
                 info("canvas: no stroke touches the canvas (nothing drawn)")
-            _write_still(plan, out, target.render([canvas]), face_folder)
+            img = target.render([canvas])
+            _note_unseen(target, img)
+            _write_still(plan, out, img, face_folder)
             info(f"canvas: {len(doc['strokes'])} stroke(s), {painted} canvas pixels painted -> {out}")
         else:
             n = _run_video(args, plan, out, target, geo, video_file)

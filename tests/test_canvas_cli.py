@@ -162,3 +162,20 @@ def test_a_canvas_seen_from_its_back_is_said_to_be_mirrored(scene, capsys):
     assert main(["canvas", str(tmp / "v.json"), "--image", str(tmp / "poster.png"), *GEO, "-o", str(tmp / "f.png")]) == 0
     assert "sees its back" not in capsys.readouterr().err
     assert not np.array_equal(read_image(tmp / "b.png"), read_image(tmp / "f.png"))
+
+
+@pytest.mark.parametrize("where", [
+    ["--center", "0.1", "0", "-3", "--normal", "0", "0", "1"],  # behind the camera
+    ["--center", "0.3", "0.2", "2.6", "--normal", "0", "0", "-1"],  # just behind the box, hidden by it
+])
+def test_a_canvas_that_covers_no_pixel_is_said_so(scene, capsys, where):
+    """A canvas behind the camera or hidden behind the scene left the output equal to the scene,
+    exit 0 and no word (new-user review): now the command says that it covers no pixel."""
+    tmp, view, poster = scene
+    size = ["--size", "0.1", "0.1"]
+    assert main(["canvas", str(tmp / "v.json"), "--image", str(tmp / "poster.png"), *where, *size,
+                 "-o", str(tmp / "n.png")]) == 0
+    assert "covers no pixel of the output" in capsys.readouterr().err
+    np.testing.assert_array_equal(read_image(tmp / "n.png"), view.color)
+    assert main(["canvas", str(tmp / "v.json"), "--image", str(tmp / "poster.png"), *GEO, "-o", str(tmp / "s.png")]) == 0
+    assert "covers no pixel" not in capsys.readouterr().err
