@@ -58,6 +58,21 @@ def _not_depth(pano, path) -> str | None:
             f"image; --depth needs one float channel (EXR/TIFF/PFM)")
 
 
+def _note_looks_like_depth(pano, path) -> None:
+    """Say so when INPUT, converted as an image, looks like a depth or range map (one float
+    channel beyond [0, 1]): without --depth it is resampled as colour, not converted."""
+    import numpy as np
+
+    from commands._common import info
+
+    img = pano[0] if isinstance(pano, list) else pano
+    if _not_depth(pano, path) is None:
+        finite = img[np.isfinite(img)]
+        if finite.size and float(np.median(finite)) > 1.0:
+            info(f"cubemap: {path} is one float channel of median {float(np.median(finite)):.3g} (a depth or range "
+                 "map?): converted as an image; add --depth to turn range into each face's planar depth")
+
+
 def run(args) -> int:
     import panorama
     from ibr.io import write_image
@@ -94,6 +109,8 @@ def run(args) -> int:
         why = _not_depth(pano, args.input) if args.depth else None
         if why:
             raise ValueError(why)
+        if not args.depth:
+            _note_looks_like_depth(pano, args.input)
         if in_layout == "equirect":
             if args.width is not None:
                 raise ValueError("--width: only used when converting a cubemap back to equirect; INPUT is "

@@ -57,11 +57,15 @@ def test_cubemap_round_trip_every_layout_and_dtype(pano_files, layout, src, dtyp
     assert np.abs(img / scale - eq).max() < 0.03  # smooth content survives the round trip
 
 
-def test_cubemap_depth(tmp_path):
+def test_cubemap_depth(tmp_path, capsys):
     rng = np.full((64, 128), 2.0, np.float32)
     write_image(tmp_path / "range.exr", rng)
     assert main(["cubemap", str(tmp_path / "range.exr"), "-o", str(tmp_path / "z"), "--depth",
                  "--face-size", "16", "--ext", ".exr"]) == 0
+    assert "a depth or range map?" not in capsys.readouterr().err
+    # without --depth a range map is resampled as an image: said so (new-user review)
+    assert main(["cubemap", str(tmp_path / "range.exr"), "-o", str(tmp_path / "asimage.exr"), "--face-size", "16"]) == 0
+    assert "one float channel of median 2 (a depth or range map?)" in capsys.readouterr().err
     z = read_image(tmp_path / "z" / "px.exr")
     from panorama.depth import face_ray_lengths
     np.testing.assert_allclose(z, 2.0 / face_ray_lengths(16)[0], rtol=1e-6)
