@@ -41,7 +41,9 @@ def add_arguments(parser) -> None:
                              "anaglyph); default "
                              "<output stem>_depth.exr; 'none' to skip")
     parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (255 = no view saw it)")
-    parser.add_argument("--width", type=_even_width, default=4096, help="equirect width per eye (even; default 4096)")
+    parser.add_argument("--width", type=_even_width, default=None,
+                        help="equirect width per eye (even); default: the sources' own resolution (a --panorama's "
+                             "width; for views 2 pi x their largest focal length in pixels, to a multiple of 4)")
     parser.add_argument("--stereo", choices=("none", "ods"), default="none",
                         help="mono panorama (default) or omnidirectional stereo")
     parser.add_argument("--ipd", type=positive_float, default=None,
@@ -80,8 +82,32 @@ def _check_args(args) -> None:
         raise ValueError(f"--layout: {layout} needs --stereo ods; a mono panorama is equirect or cube")
     if args.stereo == "ods" and layout == "equirect":
         raise ValueError("--layout: an ODS pair is packed top-bottom, sbs, cube or anaglyph, not equirect")
-    if layout == "cube" and args.width < 4:  # faces of width / 4 px (was "face_size ... 0" after the work)
+    if layout == "cube" and args.width is not None and args.width < 4:  # faces of width / 4 px (was "face_size ... 0" after the work)
         raise ValueError(f"--width: --layout cube makes faces of width / 4 pixels; expected >= 4, got {args.width}")
+
+
+#: Most pixels of a default --width (2 pi x the views' focal length), the size of a large photosphere.
+MAX_DEFAULT_WIDTH = 16384
+
+
+def _resolve_width(args, views, panorama) -> None:
+    """Set ``args.width`` when it was not given: a --panorama's own width, or the views' angular
+    resolution (2 pi x the largest focal length in pixels: one panorama pixel per source pixel at
+    the centre of the sharpest view; a multiple of 4, so cube faces are whole), and say so."""
+    import math
+
+    from commands._common import info
+
+    if args.width is not None:
+        return
+    if panorama is not None:
+        args.width, why = int(panorama[0].shape[1]), "the --panorama's width"
+    else:
+        f = max(max(v.camera.fx, v.camera.fy) for v in views)
+        args.width = min(MAX_DEFAULT_WIDTH, max(4, 4 * math.ceil(2 * math.pi * f / 4)))
+        why = f"2 pi x the views' focal length {f:.1f} px"
+    args.width += args.width % 2
+    info(f"stitch: width {args.width} ({why}; --width to choose)")
 
 
 def _expand_rig(args):
@@ -210,6 +236,7 @@ def _run_sequences(args) -> int:
         modules, warm = first_run_kernels(args)
         for k in progress(range(frames), frames, "stitch frames"):
             views = [load_view(s.views[k]) for s in seqs]
+            _resolve_width(args, views, None)  # from the first frame's views, then kept
             note_first_run(*modules, warm=warm)  # the first inputs read: say that numba compiles (once)
             packed, z, holes, seen = _stitch_frame(args, views, None, None)
             _write(plan, plan.stage(folder, f"pano_{k:04d}.png"),
@@ -259,6 +286,7 @@ def run(args) -> int:
         else:
             panorama, views = None, [load_view(p) for p in args.views]
             n = len(views)
+        _resolve_width(args, views, panorama)
         modules, warm = first_run_kernels(args)
         note_first_run(*modules, warm=warm)  # the inputs read: say that numba compiles
         steps = n * (2 if args.stereo == "ods" else 1)

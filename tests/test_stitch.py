@@ -382,6 +382,27 @@ def test_cli_stitch_from_the_bundled_centre_panorama(tmp_path):
     assert holes.shape == (256, 256) and 0 < (holes > 0).mean() < 0.05
 
 
+def test_cli_stitch_default_width_is_the_sources_resolution(tmp_path, capsys):
+    """Without --width the panorama has the sources' resolution (it was 4096 whatever they were:
+    a 512-wide centre panorama came out 8x magnified): a --panorama's own width; for views 2 pi x
+    their focal length in pixels (one panorama pixel per source pixel at a view's centre), to a
+    multiple of 4."""
+    import math
+
+    from ibr.io import load_view
+
+    pano = [str(DATA_DIR / "rig" / "capture_pano_color.png"), str(DATA_DIR / "rig" / "capture_pano_range.exr")]
+    assert cli.main(["stitch", "--panorama", *pano, "-o", str(tmp_path / "ods.png"), "--stereo", "ods"]) == 0
+    width = read_image(pano[0]).shape[1]
+    assert read_image(tmp_path / "ods.png").shape[:2] == (width, width)  # two eyes of width x width / 2
+    assert f"stitch: width {width} (the --panorama's width" in capsys.readouterr().err
+    assert cli.main(["stitch", *RIG[:2], "-o", str(tmp_path / "mono.png"), "--fill", "none"]) == 0
+    f = max(load_view(RIG[0]).camera.fx, load_view(RIG[1]).camera.fx)
+    expected = 4 * math.ceil(2 * math.pi * f / 4)
+    assert read_image(tmp_path / "mono.png").shape[:2] == (expected // 2, expected)
+    assert f"stitch: width {expected} (2 pi x the views' focal length" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("extra, message, code", [
     (["--stereo", "ods", "--ipd", "0"], "argument --ipd: expected a positive number", 2),  # usage errors: exit 2
     (["--width", "101"], "argument --width: expected an even number of pixels", 2),
