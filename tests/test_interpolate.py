@@ -274,7 +274,11 @@ def test_cli_warp(tmp_path, motorcycle, capsys):
 
 
 def test_cli_errors(tmp_path, capsys):
-    assert cli.main(["interpolate", "only_one.json"]) == 1
+    assert cli.main(["interpolate", "only_one.json"]) == 1  # missing: a mistyped sequence or view file
+    assert "SEQ: file not found: only_one.json" in capsys.readouterr().err
+    view = tmp_path / "a.json"
+    view.write_text("{}")  # exists, and is no sequence
+    assert cli.main(["interpolate", str(view)]) == 1
     assert "expected two view files" in capsys.readouterr().err
     assert cli.main(["interpolate", "--fill", "blur"]) == 2
     assert cli.main(["warp", str(tmp_path / "missing.json"), "--to", "x.json", "-o", "o.png"]) == 1
