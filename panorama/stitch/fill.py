@@ -199,14 +199,14 @@ def _row_rim_samples(color, depth, holes, *, share: float = RIM_SHARE) -> np.nda
     ``color`` (H, W) or (H, W, C), any dtype (floats in [0, 1]); ``depth`` (H, W), read where not
     ``holes``; ``holes`` (H, W) bool.
     """
-    col = np.asarray(color)
-    col = (col[..., None] if col.ndim == 2 else col).astype(np.float32)
-    rng = float(np.iinfo(np.asarray(color).dtype).max) if np.asarray(color).dtype.kind in "ui" else 1.0
+    src = np.asarray(color)
+    col = src[..., None] if src.ndim == 2 else src  # read at the runs' ends only
+    rng = float(np.iinfo(src.dtype).max) if src.dtype.kind in "ui" else 1.0
     holes = np.asarray(holes, bool)
     z = np.where(holes, np.nan, np.asarray(depth, np.float32))
     h, w = holes.shape
     seen = ~holes
-    cols = np.broadcast_to(np.arange(w), (h, w))
+    cols = np.broadcast_to(np.arange(w, dtype=np.int32), (h, w))
     prev_seen = np.maximum.accumulate(np.where(seen, cols, -1), axis=1)  # at or left of each pixel
     next_seen = np.minimum.accumulate(np.where(seen, cols, w)[:, ::-1], axis=1)[:, ::-1]  # at or right
     rim = np.zeros((h, w), bool)
@@ -226,7 +226,7 @@ def _row_rim_samples(color, depth, holes, *, share: float = RIM_SHARE) -> np.nda
             # the side the row fill copies (fill_rows_background: the left one on a tie)
             deeper = zc >= zn if step == 1 else zc > zn
             same = np.abs(zo - zc) <= 0.03 * zc
-        c, f, b = col[v, u], col[v, near], col[v, out]
+        c, f, b = (col[v, x].astype(np.float32) for x in (u, near, out))
         fb = f - b
         n2 = (fb * fb).sum(-1)
         mixed = ((c - b) * fb).sum(-1) >= share * n2
