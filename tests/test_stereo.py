@@ -583,7 +583,8 @@ def test_supersample_needs_the_mesh_method(tmp_path, capsys):
 
     assert cli.main(["stereo", str(DATA_DIR / "clutter_a.json"), "--auto", "--supersample", "3",
                      "-o", str(tmp_path / "s.png")]) == 1
-    assert "supersample: 3 needs method='mesh'" in capsys.readouterr().err
+    assert "supersample: 3 needs method='mesh' (the sub-pixel silhouettes live in the quad mesh; --method mesh on the " \
+           "command line)" in capsys.readouterr().err
     assert not (tmp_path / "s.png").exists()
 
 

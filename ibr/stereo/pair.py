@@ -233,8 +233,8 @@ def check_stereo_supersample(supersample, method: str) -> int:
     ``method``: above 1 only with ``"mesh"`` (the sub-pixel silhouettes live in the quad mesh)."""
     k = check_supersample(supersample)
     if k > 1 and method != "mesh":
-        raise ValueError(f"supersample: {k} needs method='mesh' (the sub-pixel silhouettes live in the quad mesh), "
-                         f"got method={method!r}")
+        raise ValueError(f"supersample: {k} needs method='mesh' (the sub-pixel silhouettes live in the quad mesh; "
+                         f"--method mesh on the command line), got method={method!r}")
     return k
 
 
