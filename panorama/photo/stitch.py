@@ -57,7 +57,8 @@ class StitchResult:
         point at its centre, ``world_from_cam`` = rotation into the panorama's frame, no
         translation), or None if the photo was dropped.
     report : StitchReport
-        Used/dropped photos and why, coverage, timing (:meth:`StitchReport.table`).
+        Used/dropped photos and why and coverage (:meth:`StitchReport.table`), seconds per stage
+        (``seconds``).
     """
 
     image: np.ndarray
