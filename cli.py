@@ -49,14 +49,16 @@ def build_parser() -> argparse.ArgumentParser:
     for name, module in _available_commands():
         p = sub.add_parser(name, help=module.HELP, description=module.HELP)
         module.add_arguments(p)
-        p.set_defaults(_run=module.run, _first_run=getattr(module, "first_run_kernels", None))
+        p.set_defaults(_run=module.run, _first_run=getattr(module, "first_run_kernels", None), _parser=p)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # told by the command's own parser, with its usage (the top level's said "ibr COMMAND ...")
+            (getattr(args, "_parser", None) or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
         return int(exc.code or 0)
     if args.command is None:

@@ -577,7 +577,8 @@ _add("canvas --video on a face folder (was a traceback)", C, "error", r"--video:
      argv=("canvas", "{d}/faces", "--video", "{d}/v.mp4", *GEO, "-o", "{d}/fr.mp4"), extra={"faces": "faces"})
 _add("bench unknown topic", C, "error", r"topic: expected one of", argv=("bench", "nosuch", "--out", "{d}/bench"))
 _add("unknown command", U, "usage", r"invalid choice", argv=("warpp",))
-_add("unknown option", U, "usage", r"unrecognized arguments: --bogus", argv=("samples", "--bogus"))
+_add("unknown option (told with the command's usage)", U, "usage", r"(?s)usage: ibr samples .*ibr samples: error: unrecognized arguments: --bogus",
+     argv=("samples", "--bogus"))
 
 # ---- the library refuses what the CLI refuses (same checks, same messages)
 L = "library"
