@@ -140,4 +140,17 @@ def run(args) -> int:
     info(f"stitch-photos: {len(result.report.used)} of {len(images)} photos -> {w}x{h} equirect {out}"
          + (f", cube faces in {Path(args.cube)}/" if args.cube else "")
          + f" ({time.perf_counter() - start:.1f}s); view it with: ibr view {out} --serve")
+    _warn_most_dropped(len(result.report.used), len(images), args.focal)
     return 0
+
+
+def _warn_most_dropped(used: int, total: int, focal) -> None:
+    """Say loudly when fewer than half the photos made it into the photosphere (a wrong --focal
+    removes every pair as a false match: one photo stitched, exit 0, and only the table said why)."""
+    from commands._common import info
+
+    if total < 2 or 2 * used >= total:
+        return
+    hint = (f"; --focal {focal:g} may not be the photos' focal length in pixels: without it the focal length is "
+            "estimated" if focal is not None else "; the table above says why each was left out")
+    info(f"stitch-photos: WARNING: only {used} of {total} photos are in the photosphere{hint}")

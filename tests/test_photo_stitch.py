@@ -359,3 +359,19 @@ def test_an_rgb_fill_for_grey_and_rgba_photos(sphere):
     rgba = [np.dstack([im, np.full(im.shape[:2], 255, np.uint8)]) for im in p.images]
     r = stitch_photos(rgba, width=256, fill=(255, 0, 255))
     assert r.image.shape[2] == 3 and tuple(r.image[~r.coverage][0]) == (255, 0, 255)
+
+
+def test_cli_warns_when_most_photos_are_left_out(capsys):
+    """A wrong --focal removed every pair as a false match: one photo stitched, exit 0 (docs
+    audit). The command now warns when fewer than half the photos are in the photosphere, and
+    names --focal when it was given; not when half or more are used."""
+    from commands.stitch_photos import _warn_most_dropped
+
+    _warn_most_dropped(1, 12, 1109.5)
+    err = capsys.readouterr().err
+    assert "WARNING: only 1 of 12 photos are in the photosphere; --focal 1109.5 may not be" in err
+    _warn_most_dropped(5, 12, None)
+    assert "only 5 of 12 photos" in (err := capsys.readouterr().err) and "the table above says why" in err
+    _warn_most_dropped(6, 12, 1109.5)
+    _warn_most_dropped(1, 1, None)
+    assert "WARNING" not in capsys.readouterr().err
