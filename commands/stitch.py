@@ -86,8 +86,9 @@ def _check_args(args) -> None:
         raise ValueError(f"--width: --layout cube makes faces of width / 4 pixels; expected >= 4, got {args.width}")
 
 
-#: Most pixels of a default --width (2 pi x the views' focal length), the size of a large photosphere.
-MAX_DEFAULT_WIDTH = 16384
+#: Widest default --width (2 pi x the views' focal length): a large photosphere, ~1 GB of work
+#: arrays per eye; wider only when asked for.
+MAX_DEFAULT_WIDTH = 8192
 
 
 def _resolve_width(args, views, panorama) -> None:
@@ -104,8 +105,10 @@ def _resolve_width(args, views, panorama) -> None:
         args.width, why = int(panorama[0].shape[1]), "the --panorama's width"
     else:
         f = max(max(v.camera.fx, v.camera.fy) for v in views)
-        args.width = min(MAX_DEFAULT_WIDTH, max(4, 4 * math.ceil(2 * math.pi * f / 4)))
-        why = f"2 pi x the views' focal length {f:.1f} px"
+        native = max(4, 4 * math.ceil(2 * math.pi * f / 4))
+        args.width = min(MAX_DEFAULT_WIDTH, native)
+        why = f"2 pi x the views' focal length {f:.1f} px" + (f" is {native}: at most {MAX_DEFAULT_WIDTH} by default"
+                                                              if native > MAX_DEFAULT_WIDTH else "")
     args.width += args.width % 2
     info(f"stitch: width {args.width} ({why}; --width to choose)")
 

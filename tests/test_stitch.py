@@ -440,6 +440,15 @@ def test_cli_stitch_default_width_is_the_sources_resolution(tmp_path, capsys):
     expected = 4 * math.ceil(2 * math.pi * f / 4)
     assert read_image(tmp_path / "mono.png").shape[:2] == (expected // 2, expected)
     assert f"stitch: width {expected} (2 pi x the views' focal length" in capsys.readouterr().err
+    # long focal lengths: at most MAX_DEFAULT_WIDTH unless --width asks for more
+    from types import SimpleNamespace
+
+    from commands.stitch import MAX_DEFAULT_WIDTH, _resolve_width
+
+    args = SimpleNamespace(width=None)
+    _resolve_width(args, [SimpleNamespace(camera=SimpleNamespace(fx=5000.0, fy=5000.0))], None)
+    assert args.width == MAX_DEFAULT_WIDTH == 8192
+    assert "is 31416: at most 8192 by default" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("extra, message, code", [
