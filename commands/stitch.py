@@ -43,7 +43,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (255 = no view saw it)")
     parser.add_argument("--width", type=_even_width, default=None,
                         help="equirect width per eye (even); default: the sources' own resolution (a --panorama's "
-                             "width; for views 2 pi x their largest focal length in pixels, to a multiple of 4)")
+                             "width; for views 2 pi x their largest focal length in pixels, to a multiple of 4, at "
+                             "most 8192)")
     parser.add_argument("--stereo", choices=("none", "ods"), default="none",
                         help="mono panorama (default) or omnidirectional stereo")
     parser.add_argument("--ipd", type=positive_float, default=None,
