@@ -16,6 +16,11 @@ def info(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
+def counted(n: int, noun: str) -> str:
+    """``"1 frame"``, ``"3 frames"``: ``n`` and the noun, plural (with an s) unless ``n`` is 1."""
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
 def holes_summary(rendering) -> str:
     """``holes 0.124% (filled 0.124%, and 0.069% covered pixels beside them recoloured)`` for an
     :class:`ibr.Rendering`: the share of pixels no source covered, how many of them the fill

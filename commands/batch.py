@@ -33,7 +33,7 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from commands._common import info
+    from commands._common import counted, info
     from commands._sequence import Progress
     from ibr.sequence.batch import run_batch
     from ibr.sequence.jobs import check_batch_files, load_jobs
@@ -62,7 +62,7 @@ def run(args) -> int:
             raise RuntimeError('--scheduler: Dask is not installed; pip install "ibr[dask]" '
                                '(or "dask[distributed]")') from None
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else "the local pool"
-    info(f"batch: {len(jobs)} job{'s' if len(jobs) != 1 else ''} from {jobs_path} on {where}; records in {records}")
+    info(f"batch: {counted(len(jobs), 'job')} from {jobs_path} on {where}; records in {records}")
     bar = Progress(len(jobs), "batch", unit="jobs")
 
     def on_result(res):

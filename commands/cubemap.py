@@ -60,17 +60,15 @@ def _not_depth(pano, path) -> str | None:
 
 def _note_looks_like_depth(pano, path) -> None:
     """Say so when INPUT, converted as an image, looks like a depth or range map (one float
-    channel beyond [0, 1]): without --depth it is resampled as colour, not converted."""
-    import numpy as np
-
+    channel beyond [0, 1], the test of :func:`ibr.io.images.check_unit_colour`): without --depth
+    it is resampled as colour, not converted."""
     from commands._common import info
+    from ibr.io.images import _depth_like
 
-    img = pano[0] if isinstance(pano, list) else pano
-    if _not_depth(pano, path) is None:
-        finite = img[np.isfinite(img)]
-        if finite.size and float(np.median(finite)) > 1.0:
-            info(f"cubemap: {path} is one float channel of median {float(np.median(finite)):.3g} (a depth or range "
-                 "map?): converted as an image; add --depth to turn range into each face's planar depth")
+    got = _depth_like(pano[0] if isinstance(pano, list) else pano)
+    if got is not None:
+        info(f"cubemap: {path} is one float channel of median {got[2]:.3g} (a depth or range map?): converted as "
+             "an image; add --depth to turn range into each face's planar depth")
 
 
 def run(args) -> int:

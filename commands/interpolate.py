@@ -282,7 +282,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import holes_summary, info, note_first_run, progress
+    from commands._common import counted, holes_summary, info, note_first_run, progress
     from ibr.io import load_view, write_image
     from ibr.io.outputs import OutputPlan, VIDEO_EXTS
     from commands._sequence import is_sequence_argument, run_interpolate  # sequences (#15)
@@ -393,11 +393,11 @@ def run(args) -> int:
         first += ", including loading the compiled kernels"
     # the first frame loads (or compiles) the kernels: the typical frame is the median of the rest
     per = np.median(times[1:]) if len(times) > 1 else times[0]
-    info(f"wrote {len(ts)} frame{'s' if len(ts) != 1 else ''} to {out}/ (median {per * 1e3:.1f} ms per frame, {first})")
+    info(f"wrote {counted(len(ts), 'frame')} to {out}/ (median {per * 1e3:.1f} ms per frame, {first})")
     if scores:
         p = np.array(scores)
         info(f"ground truth: mean PSNR {p[:, 0].mean():.2f} dB, mean SSIM {p[:, 1].mean():.4f} "
-             f"over {len(p)} frame{'s' if len(p) != 1 else ''}")
+             f"over {counted(len(p), 'frame')}")
     elif truth_paths:  # e.g. the bundled pair with --frames 6: no frame at a ground-truth position
         at = ", ".join(f"{t:g}" for t in sorted(truth_paths))
         info(f"ground truth: none at these t (its views are at t = {at}); no PSNR/SSIM")

@@ -201,7 +201,9 @@ def _write(plan, out, dep, holes_out, packed, depth, holes) -> None:
 
 
 def _describe(args, n, seen, panorama) -> str:
-    return (f"{n} {'cube faces of the panorama' if panorama else 'view' if n == 1 else 'views'}, "
+    from commands._common import counted
+
+    return (f"{f'{n} cube faces of the panorama' if panorama else counted(n, 'view')}, "
             f"{'ODS ' + (args.layout or 'top-bottom') if args.stereo == 'ods' else 'mono'}, "
             f"seen {seen:.2%} of the sphere (holes {1 - seen:.2%}{', filled' if args.fill != 'none' else ''})")
 

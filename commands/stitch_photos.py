@@ -92,7 +92,7 @@ def run(args) -> int:
     import panorama
     from ibr.io import read_image, write_image
     from ibr.io.outputs import IMAGE_EXTS, JSON_EXTS, OutputPlan
-    from commands._common import face_file_patterns, image_for
+    from commands._common import counted, face_file_patterns, image_for
     from panorama.files import write_cubemap
 
     out = Path(args.output)
@@ -118,7 +118,7 @@ def run(args) -> int:
             if done == total:
                 info(f"stitch-photos: {step} done ({time.perf_counter() - start:.1f}s)")
 
-        info(f"stitch-photos: {len(images)} photo{'s' if len(images) != 1 else ''}")
+        info(f"stitch-photos: {counted(len(images), 'photo')}")
         result = panorama.stitch_photos(
             images, width=args.width, names=names, focal_px=args.focal, detector=args.detector,
             conf_thresh=args.conf, wave_correct=not args.no_level, reference=args.reference,
@@ -147,8 +147,6 @@ def run(args) -> int:
 def _warn_most_dropped(used: int, total: int, focal) -> None:
     """Say loudly when fewer than half the photos made it into the photosphere (a wrong --focal
     removes every pair as a false match: one photo stitched, exit 0, and only the table said why)."""
-    from commands._common import info
-
     if total < 2 or 2 * used >= total:
         return
     hint = (f"; --focal {focal:g} may not be the photos' focal length in pixels: without it the focal length is "

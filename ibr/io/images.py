@@ -247,17 +247,28 @@ def check_unit_colour(what: str, img, into: str, advice: str = "write it to .exr
     finite values (the median) lie above 1, or some below 0, by more than half an 8-bit step.
     Clipped, it would be all white. A grey HDR image (highlights above 1) and colour (three or four
     channels) clip as usual. Raises ValueError naming ``what``, ending with ``advice``."""
+    got = _depth_like(img)
+    if got is not None:
+        lo, hi, typical = got
+        raise ValueError(f"{what}: {into} would hold 8-bit grey levels 0-1, but this one-channel float image "
+                         f"holds {lo:.4g} to {hi:.4g}, median {typical:.4g} (a depth or range map); {advice}")
+
+
+def _depth_like(img) -> tuple[float, float, float] | None:
+    """(min, max, median) of the finite values of a one-channel float image that holds depth or
+    range rather than grey levels (the median above 1, or some value below 0, by more than half an
+    8-bit step), else None (:func:`check_unit_colour`'s test)."""
     a = np.asarray(img)
     if a.dtype.kind != "f" or not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] == 1)):
-        return
+        return None
     finite = a[np.isfinite(a)]
     if not finite.size:
-        return
+        return None
     typical = float(np.median(finite[:: max(1, finite.size // 100_000)]))  # a sample: 8 Mpx took 0.1 s
-    if typical > 1 + 0.5 / 255 or finite.min() < -0.5 / 255:
-        raise ValueError(f"{what}: {into} would hold 8-bit grey levels 0-1, but this one-channel float image "
-                         f"holds {finite.min():.4g} to {finite.max():.4g}, median {typical:.4g} (a depth or range "
-                         f"map); {advice}")
+    lo = float(finite.min())
+    if typical > 1 + 0.5 / 255 or lo < -0.5 / 255:
+        return lo, float(finite.max()), typical
+    return None
 
 
 def check_write_dtype(name: str, path, dtype) -> str:
