@@ -141,3 +141,9 @@ def test_samples_rerun_replaces_and_refuses_its_own_data_folder(samples_dir, cap
 
     assert cli.main(["samples", "--out", str(DATA_DIR)]) == 1
     assert "bundled data folder itself" in capsys.readouterr().err
+
+
+def test_counted_says_one_frame_and_two_frames():
+    from commands._common import counted
+
+    assert [counted(n, "frame") for n in (0, 1, 2)] == ["0 frames", "1 frame", "2 frames"]
