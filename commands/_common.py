@@ -37,6 +37,45 @@ def holes_summary(rendering) -> str:
     return text + (f", and {rim:.3%} covered pixels beside them recoloured)" if rim else ")")
 
 
+def invented(rendering) -> tuple[float, float]:
+    """(holes, filled): the shares of an :class:`ibr.Rendering`'s pixels that no source covered,
+    and of those the fill wrote (invented: a guess from the nearby background)."""
+    holes, filled = rendering.holes, rendering.filled
+    return float(holes.mean()), float((holes & filled).mean())
+
+
+def invented_warning(command: str, shares, what: str = "the output", hint: str = "") -> str | None:
+    """A warning line when more than half of a rendering is holes (no source pixel lands there: a
+    target camera that sees little of the sources, e.g. a far wider one or one turned away), else
+    None: ``"warp: WARNING: the output is 98.7% invented by the hole fill (...)"``, or ``is ...
+    holes`` where no fill wrote them (``--fill none``: black).
+
+    Parameters
+    ----------
+    command : str
+        The line's prefix (``"warp"``, ``"interpolate"``).
+    shares : sequence of (label, holes, filled)
+        Per rendering, a label (``"frame 3 (t=0.500)"``) and :func:`invented`'s two shares; with
+        several, the line counts those over half holes and names the worst.
+    what : str
+        What a single rendering is called in the line.
+    hint : str
+        What to check, ending the line (e.g. ``"is --to the camera you meant?"``).
+    """
+    shares = list(shares)
+    over = [s for s in shares if s[1] > 0.5]
+    if not over:
+        return None
+    label, holes, filled = max(over, key=lambda s: s[1])
+    where = (f"{len(over)} of {len(shares)} frames {'is' if len(over) == 1 else 'are'} mostly guessed; {label} is"
+             if len(shares) > 1 else f"{what} is")
+    if filled > 0:
+        return (f"{command}: WARNING: {where} {filled:.1%} invented by the hole fill (no source pixel lands "
+                "there; the fill is a guess from the nearby background, not the scene)" + (f"; {hint}" if hint else ""))
+    return (f"{command}: WARNING: {where} {holes:.1%} holes (no source pixel lands there; left black "
+            "without a fill)" + (f"; {hint}" if hint else ""))
+
+
 def progress(items: Iterable[T], total: int, label: str) -> Iterator[T]:
     """Yield ``items`` while drawing a one-line progress bar on stderr.
 

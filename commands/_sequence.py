@@ -14,7 +14,7 @@ from __future__ import annotations
 import sys
 import time
 
-from commands._common import info, note_first_run
+from commands._common import info, invented, invented_warning, note_first_run
 
 
 # --------------------------------------------------------------------------- progress
@@ -245,7 +245,7 @@ def run_interpolate(args) -> int:
              f"{', tail extrapolated' if not args.no_tail else ''}), fill {args.fill}"
              + (f", scored against {truth.source}" if truth is not None else ""))
         bar = Progress(n_out, "interpolate")
-        rows, changes, shares = [], [], []
+        rows, changes, shares, guessed = [], [], [], []
         hole_changes, hole_shares, truth_changes = [], [], []
         prev = prev_truth = None
         t_prev = time.perf_counter()
@@ -282,6 +282,7 @@ def run_interpolate(args) -> int:
                         truth_changes.append(frame_change(prev_truth, gt, static))
                 prev, prev_truth = r, gt
                 rows.append(row)
+                guessed.append((f"frame {fr.index} (t={fr.t:.3f} of segment {fr.segment})", *invented(r)))
                 bar.step()
                 t_prev = time.perf_counter()
         finally:
@@ -325,6 +326,10 @@ def run_interpolate(args) -> int:
         plan.commit()
     info(f"interpolate: wrote {len(rows)} frames to {out}/" + (f", video {video} at {fps:g} fps" if video else "")
          + (f", report {report}" if report else ""))
+    warning = invented_warning("interpolate", guessed, what="the frame",
+                               hint="do consecutive views see what lies between them?")
+    if warning:  # exit 0 all the same: the frames are written, mostly a guess
+        info(warning)
     return 0
 
 

@@ -67,7 +67,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import holes_summary, image_for, info, note_first_run
+    from commands._common import holes_summary, image_for, info, invented, invented_warning, note_first_run
     from commands.interpolate import _to_float
     from ibr.base.view import View
     from ibr.io import load_view, write_depth, write_image
@@ -112,4 +112,8 @@ def run(args) -> int:
         written = plan.commit()
     info(line)
     info(f"wrote {', '.join(map(str, written))}")
+    warning = invented_warning("warp", [("", *invented(result))],
+                               hint="does the --to camera see what VIEW shows?")
+    if warning:  # exit 0 all the same: the picture is written, mostly a guess
+        info(warning)
     return 0

@@ -1,0 +1,82 @@
+"""Regressions from a new-user walkthrough of the command line: warnings where the output is
+mostly a guess, notes on defaults a file relies on, and messages that name what the user gave."""
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cli
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "samples" / "data"
+
+
+def _copy_view(src: Path, folder: Path, name: str, **camera) -> Path:
+    """A copy of view file ``src`` (with its colour and depth files) in ``folder`` as ``name``,
+    its camera's keys replaced by ``camera`` (None: the key removed)."""
+    doc = json.loads(src.read_text())
+    for key in ("color",):
+        shutil.copyfile(src.parent / doc[key], folder / doc[key])
+    if doc.get("depth"):
+        shutil.copyfile(src.parent / doc["depth"]["path"], folder / doc["depth"]["path"])
+    for k, v in camera.items():
+        if v is None:
+            doc["camera"].pop(k, None)
+        else:
+            doc["camera"][k] = v
+    path = folder / name
+    path.write_text(json.dumps(doc))
+    return path
+
+
+# --------------------------------------------------------------------------- 1: mostly invented output
+def test_warp_warns_when_most_of_the_output_is_invented_by_the_fill(tmp_path, capsys):
+    cam = json.loads((DATA / "room_a.json").read_text())["camera"]
+    wide = tmp_path / "wide.json"
+    wide.write_text(json.dumps(dict(cam, fx=50, fy=50)))  # sees the room as a speck in the middle
+    out = tmp_path / "w.png"
+    assert cli.main(["warp", str(DATA / "room_a.json"), "--to", str(wide), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    holes = float(re.search(r"holes (\d+\.\d+)% \(filled", err).group(1))
+    m = re.search(r"warp: WARNING: the output is (\d+\.\d)% invented by the hole fill .*a guess", err)
+    assert m, err
+    assert holes > 90 and float(m.group(1)) == pytest.approx(holes, abs=0.05)
+    assert out.is_file()
+    # unfilled: said as holes
+    assert cli.main(["warp", str(DATA / "room_a.json"), "--to", str(wide), "-o", str(out), "--fill", "none"]) == 0
+    assert re.search(r"warp: WARNING: the output is 9\d\.\d% holes .*left black", capsys.readouterr().err)
+    # a target that sees the source: no warning
+    assert cli.main(["warp", str(DATA / "room_a.json"), "--to", str(DATA / "room_b.json"), "-o", str(out)]) == 0
+    assert "WARNING" not in capsys.readouterr().err
+
+
+def test_interpolate_warns_about_the_frames_the_fill_invents(tmp_path, capsys):
+    """B turned 110 degrees from A: the frame half-way looks where neither source looked."""
+    a = np.deg2rad(110)
+    pose = np.eye(4)
+    pose[:3, :3] = [[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]
+    turned = _copy_view(DATA / "room_a.json", tmp_path, "turned.json", world_from_cam=pose.tolist())
+    out = tmp_path / "o"
+    assert cli.main(["interpolate", str(DATA / "room_a.json"), str(turned), "--frames", "3", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    holes = float(re.search(r"frame 2/3 t=0.500: .*holes (\d+\.\d+)%", err).group(1))
+    m = re.search(r"interpolate: WARNING: 1 of 3 frames is mostly guessed; frame 2 \(t=0.500\) is (\d+\.\d)% "
+                  r"invented by the hole fill", err)
+    assert m, err
+    assert 50 < holes and float(m.group(1)) == pytest.approx(holes, abs=0.05)
+    assert len(list(out.glob("frame_*.png"))) == 3
+
+
+def test_invented_warning_starts_above_half():
+    from commands._common import invented_warning
+
+    assert invented_warning("warp", [("", 0.5, 0.5)]) is None
+    assert invented_warning("warp", [("", 0.49, 0.0)]) is None
+    line = invented_warning("warp", [("", 0.501, 0.501)], hint="check --to")
+    assert line.startswith("warp: WARNING: the output is 50.1% invented by the hole fill") and line.endswith("; check --to")
+    two = invented_warning("interpolate", [("frame 1", 0.6, 0.6), ("frame 2", 0.9, 0.8), ("frame 3", 0.1, 0.1)])
+    assert "2 of 3 frames are mostly guessed; frame 2 is 80.0% invented" in two
