@@ -265,6 +265,9 @@ _add("--to wrapped camera with an extra key", C, "error", r"unknown key 'extra'"
 _add("--to wrapped camera", C, "ok", r"wrote", argv=("warp", "{d}/a.json", "--to", "{d}/cam.json", "-o", "{d}/o.png"),
      extra={"camera_wrap": {}})
 _add("--to bare camera", C, "ok", r"wrote .*o.png", argv=("warp", "{d}/a.json", "--to", "{d}/cam.json", "-o", "{d}/o.png"))
+_add("--to bare camera without world_from_cam (noted)", C, "ok",
+     r"note: .*cam.json has no world_from_cam: camera at the origin looking down \+z",
+     argv=("warp", "{d}/a.json", "--to", "{d}/cam.json", "-o", "{d}/o.png"), extra={"camera": _del(("world_from_cam",))})
 
 GEO = ("--center", "0", "0", "4", "--normal", "0", "0", "-1", "--size", "1", "1")  # a canvas in front of a.json
 

@@ -80,3 +80,37 @@ def test_invented_warning_starts_above_half():
     assert line.startswith("warp: WARNING: the output is 50.1% invented by the hole fill") and line.endswith("; check --to")
     two = invented_warning("interpolate", [("frame 1", 0.6, 0.6), ("frame 2", 0.9, 0.8), ("frame 3", 0.1, 0.1)])
     assert "2 of 3 frames are mostly guessed; frame 2 is 80.0% invented" in two
+
+
+# --------------------------------------------------------------------------- 2: a camera without a pose
+def test_a_view_or_camera_file_without_a_pose_loads_with_the_identity_and_is_noted(tmp_path, capsys):
+    from ibr.io import load_camera, load_view
+
+    view = _copy_view(DATA / "room_a.json", tmp_path, "a.json", world_from_cam=None)
+    cam = tmp_path / "cam.json"
+    cam.write_text(json.dumps({k: v for k, v in json.loads((DATA / "room_b.json").read_text())["camera"].items()
+                               if k != "world_from_cam"}))
+    assert np.array_equal(load_view(view).camera.world_from_cam, np.eye(4))
+    assert np.array_equal(load_camera(cam).world_from_cam, np.eye(4))
+    out = tmp_path / "o.png"
+    assert cli.main(["warp", str(view), "--to", str(cam), "-o", str(out)]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if line.startswith("note:")]
+    assert notes == [f"note: {p} has no world_from_cam: camera at the origin looking down +z (the identity pose)"
+                     for p in (view, cam)]
+    # posed files: no note
+    assert cli.main(["warp", str(DATA / "room_a.json"), "--to", str(DATA / "room_b.json"), "-o", str(out)]) == 0
+    assert "no world_from_cam" not in capsys.readouterr().err
+
+
+def test_many_files_without_a_pose_are_noted_in_one_line(tmp_path):
+    from ibr.io.outputs import OutputPlan
+
+    lines = []
+    paths = [_copy_view(DATA / "room_a.json", tmp_path, f"v{i}.json", world_from_cam=None) for i in range(5)]
+    with OutputPlan("test", log=lines.append) as plan:
+        for p in paths + paths[:1]:  # the same file twice is one file
+            plan.add_view_input("VIEW", p)
+        plan.add_view_input("posed", DATA / "room_b.json")
+        plan.check()
+    assert lines == [f"note: 5 view files ({paths[0]}, {paths[1]}, ...) have no world_from_cam: each camera at "
+                     "the origin looking down +z (the identity pose)"]

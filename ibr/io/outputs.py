@@ -202,6 +202,7 @@ class OutputPlan:
         self._checked = False
         self._done = False
         self._old_sigterm = None
+        self._poseless: list[Path] = []  # view / camera files without world_from_cam (noted at check)
 
     # ----------------------------------------------------------------- declaring
     def add_input(self, what: str, path) -> Path | None:
@@ -222,7 +223,8 @@ class OutputPlan:
         """Record a view file (or bare camera JSON) and the colour and depth files it names.
 
         The JSON is only peeked at here (``color`` and ``depth.path``, relative to the file);
-        :func:`ibr.io.load_view` does the validation and reports a broken file.
+        :func:`ibr.io.load_view` does the validation and reports a broken file. A camera without
+        ``world_from_cam`` (valid: the identity pose) is logged as a note by :meth:`check`.
         """
         p = self.add_input(what, path)
         if p is None:
@@ -235,10 +237,12 @@ class OutputPlan:
             return p
         if not isinstance(doc, dict):
             return p
-        from .view_files import named_files
+        from .view_files import camera_without_pose, named_files
 
         for key, file in named_files(p, doc):
             self.add_input(f"{what} {key}", file)
+        if camera_without_pose(doc) and not any(same_file(p, q) for q in self._poseless):
+            self._poseless.append(p)
         return p
 
     def add_file(self, option: str, path, exts: Iterable[str] | None = None) -> Path | None:
@@ -388,7 +392,22 @@ class OutputPlan:
             else:
                 o.staged = self._staging_for(o, _abs(o.path).parent) / o.path.name
         self._checked = True
+        self._note_poseless()
         return self
+
+    def _note_poseless(self) -> None:
+        """Log that the view / camera inputs without ``world_from_cam`` have the identity pose (one
+        line per file, or one line for more than three)."""
+        from .view_files import NO_POSE_NOTE
+
+        files = self._poseless
+        if len(files) > 3:
+            names = ", ".join(str(p) for p in files[:2])
+            self.log(NO_POSE_NOTE.format(path=f"{len(files)} view files ({names}, ...)").replace(" has ", " have ", 1)
+                     .replace("camera at", "each camera at", 1))
+        else:
+            for p in files:
+                self.log(NO_POSE_NOTE.format(path=p))
 
     def _staging_for(self, o: _Output, folder: Path, *, own: bool = False) -> Path:
         folder = Path(os.path.realpath(folder))

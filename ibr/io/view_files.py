@@ -235,6 +235,21 @@ def named_files(path, doc) -> list[tuple[str, Path]]:
     return [(key, Path(path).parent / rel) for key, rel in refs if isinstance(rel, str) and rel]
 
 
+def camera_without_pose(doc) -> bool:
+    """Whether the document ``doc`` of a view file, a bare camera JSON or a wrapped one
+    (``{"camera": {...}}``) has a camera object without ``world_from_cam``: a valid file whose
+    camera :func:`load_view` / :func:`load_camera` place at the world origin looking down +z
+    (the identity pose). Only peeks, as :func:`named_files`: anything else is False."""
+    if not isinstance(doc, dict):
+        return False
+    cam = doc.get("camera") if ("format" in doc or isinstance(doc.get("camera"), dict)) else doc
+    return isinstance(cam, dict) and "fx" in cam and "world_from_cam" not in cam
+
+
+#: The note a command prints for a view or camera file without a pose (``{path}``: the file).
+NO_POSE_NOTE = "note: {path} has no world_from_cam: camera at the origin looking down +z (the identity pose)"
+
+
 def _json_number(x: float):
     return "inf" if isinstance(x, float) and math.isinf(x) else x
 
