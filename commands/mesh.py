@@ -25,8 +25,12 @@ def add_arguments(parser) -> None:
                         help="camera move for --max-error, scene units (default 5%% of the median depth)")
     parser.add_argument("--method", choices=METHODS, default="edge",
                         help="edge (default: edge-aware, error-bounded), separate, or paper (faithful seed 002)")
-    parser.add_argument("--obj", metavar="OUT.obj", help="write the mesh as Wavefront OBJ (+ .mtl)")
-    parser.add_argument("--ply", metavar="OUT.ply", help="write the mesh as binary PLY")
+    parser.add_argument("--obj", metavar="OUT.obj",
+                        help="write the mesh as Wavefront OBJ, with OUT.mtl and the texture OUT_texture.png beside it "
+                             "(the view's colour; files of these names are replaced, an input is refused)")
+    parser.add_argument("--ply", metavar="OUT.ply",
+                        help="write the mesh as binary PLY, with the texture OUT_texture.png beside it (with --obj: "
+                             "the OBJ's texture; replaced as --obj's)")
     parser.add_argument("--frame", choices=("cam", "world"), default="cam",
                         help="vertex coordinates of the exports (default: source camera frame)")
     parser.add_argument("--viz", metavar="SEG.png", help="write the segmentation drawn over the image")
@@ -65,6 +69,8 @@ def run(args) -> int:
         if obj:
             mtl = plan.add_file("--obj (its material file)", obj.with_suffix(".mtl"), (".mtl",))
         plan.check()  # every output checked before any work (#12)
+        # the implicit outputs (not named on the command line) are said to be replaced when they were there
+        existed = {p: p.exists() for p in (texture, mtl) if p is not None}
         from ibr.mesh.quad_mesh import build_mesh  # after cli.main started the helper (numba: 0.3 s)
 
         view = load_view(args.view)
@@ -109,10 +115,12 @@ def run(args) -> int:
         if viz:
             write_segmentation_png(mesh, view.color, plan.stage(viz), scale=args.viz_scale)
         plan.commit()
+    said = lambda p: f"{p}{' (replaced)' if existed[p] else ''}"  # noqa: E731
     if obj:
-        info(f"wrote {obj} ({n_obj} quads, texture {texture.name}, material {mtl.name})")
+        info(f"wrote {obj} ({n_obj} quads), its material {said(mtl)} and texture {said(texture)}")
     if ply:
-        info(f"wrote {ply} ({n_ply} quads)")
+        info(f"wrote {ply} ({n_ply} quads), " + (f"its texture {said(texture)}" if not obj else
+                                                 f"textured with {texture.name}"))
     if viz:
         info(f"wrote {viz}")
     return 0

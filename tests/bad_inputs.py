@@ -318,6 +318,8 @@ _add("mesh --viz the source's colour", O, "error", r"--viz: .*a_color.png is the
 _add("mesh --obj the view file", O, "error", r"--obj: .* has the extension '.json'", argv=("mesh", "{d}/a.json", "--obj", "{d}/a.json"))
 _add("mesh --obj whose texture is an input", O, "error", r"--obj \(its texture\): .*is the input",
      argv=("mesh", "{d}/a.json", "--obj", "{d}/t.obj"), extra={"symlink": ("t_texture.png", "a_color.png")})
+_add("mesh --ply whose texture is an input", O, "error", r"--ply \(its texture\): .*t_texture.png is the input VIEW 'color'",
+     argv=("mesh", "{d}/a.json", "--ply", "{d}/t.ply"), extra={"symlink": ("t_texture.png", "a_color.png"), "absent": ("t.ply",)})
 _add("mesh --viz .jpg", O, "error", r"--viz: .* has the extension '.jpg'; expected one of .png",
      argv=("mesh", "{d}/a.json", "--viz", "{d}/s.jpg"))
 _add("cubemap -o the input", O, "error", r"-o: .*pano.png is the input INPUT", argv=("cubemap", "{d}/pano.png", "-o", "{d}/pano.png"),

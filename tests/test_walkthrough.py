@@ -114,3 +114,34 @@ def test_many_files_without_a_pose_are_noted_in_one_line(tmp_path):
         plan.check()
     assert lines == [f"note: 5 view files ({paths[0]}, {paths[1]}, ...) have no world_from_cam: each camera at "
                      "the origin looking down +z (the identity pose)"]
+
+
+# --------------------------------------------------------------------------- 10: the mesh's texture file
+def test_mesh_names_its_texture_replaces_an_old_one_and_refuses_an_input(tmp_path, capsys):
+    from ibr.io import load_view, read_image
+
+    view = _copy_view(DATA / "room_a.json", tmp_path, "a.json")
+    old = tmp_path / "m_texture.png"
+    old.write_bytes(b"an earlier run's texture")
+    assert cli.main(["mesh", str(view), "--ply", str(tmp_path / "m.ply")]) == 0
+    err = capsys.readouterr().err
+    assert f"wrote {tmp_path / 'm.ply'} (" in err and f"its texture {old} (replaced)" in err
+    assert np.array_equal(read_image(old), load_view(view).color)
+    assert cli.main(["mesh", str(view), "--obj", str(tmp_path / "n.obj")]) == 0
+    err = capsys.readouterr().err
+    assert f"its material {tmp_path / 'n.mtl'} and texture {tmp_path / 'n_texture.png'}" in err
+    assert "(replaced)" not in err
+    # the texture name is the view's own colour file: refused before any work
+    colour = json.loads(view.read_text())["color"]
+    before = (tmp_path / colour).read_bytes()
+    (tmp_path / "room_texture.png").symlink_to(colour)
+    assert cli.main(["mesh", str(view), "--ply", str(tmp_path / "room.ply")]) == 1
+    err = capsys.readouterr().err
+    assert "ibr mesh: error: --ply (its texture): " in err and "is the input VIEW 'color'" in err
+    assert (tmp_path / colour).read_bytes() == before and not (tmp_path / "room.ply").exists()
+
+
+def test_mesh_help_names_the_texture_and_material_files(capsys):
+    assert cli.main(["mesh", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "OUT.mtl and the texture OUT_texture.png" in text and "the texture OUT_texture.png beside it" in text
