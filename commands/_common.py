@@ -76,6 +76,20 @@ def invented_warning(command: str, shares, what: str = "the output", hint: str =
             "without a fill)" + (f"; {hint}" if hint else ""))
 
 
+def check_source_depth(what: str, path, view, purpose: str = "so it cannot be a source") -> None:
+    """Refuse a source view whose depth has no valid pixel (all NaN: zero, negative or infinite
+    values are made NaN when a view file is read) as the library does (``ibr.warp`` /
+    ``ibr.interpolate``: "view 'room_a': the depth has no valid pixel ..."), naming the option
+    ``what`` and the file ``path`` the user gave rather than the view's ``name`` (which need not be
+    the file's: a copy of room_a.json with another depth is still 'room_a'). A view without depth
+    is left to the command's own check."""
+    import numpy as np
+
+    if view.depth is not None and not np.isfinite(view.depth).any():
+        raise ValueError(f"{what}: {path}: the depth has no valid pixel (NaN, zero, negative or infinite "
+                         f"everywhere), {purpose}")
+
+
 def progress(items: Iterable[T], total: int, label: str) -> Iterator[T]:
     """Yield ``items`` while drawing a one-line progress bar on stderr.
 

@@ -247,14 +247,19 @@ def _comparable(color, truth, path):
     return color, truth
 
 
-def _check_pair(path_a, view_a, path_b, view_b):
-    """The library's source checks, naming the positionals A / B (not ``view_a`` / ``view_b``):
-    both views hold depth and have one size; colours of two types (8- and 16-bit) are both made
-    float 0-1. Returns the two views."""
+def _check_pair(path_a, view_a, path_b, view_b, method: str = "mesh"):
+    """The library's source checks, naming the positionals A / B (not ``view_a`` / ``view_b``) and
+    their files (not the views' names): both views hold depth (with a valid pixel, for the mesh
+    warp) and have one size; colours of two types (8- and 16-bit) are both made float 0-1.
+    Returns the two views."""
+    from commands._common import check_source_depth
+
     for name, path, view in (("A", path_a, view_a), ("B", path_b, view_b)):
         if view.depth is None:
             raise ValueError(f"{name}: {path} has no depth, so it cannot be a source (a view without depth can "
                              "only give a target camera)")
+        if method == "mesh":
+            check_source_depth(name, path, view)
     if view_a.shape != view_b.shape:
         raise ValueError(f"B: {path_b} is {view_b.camera.width}x{view_b.camera.height}, A ({path_a}) is "
                          f"{view_a.camera.width}x{view_a.camera.height}; both sources must have the same size")
@@ -336,7 +341,7 @@ def run(args) -> int:
         # imported after cli.main started the first-run helper: numba's import (0.3 s) overlaps it
         from ibr.render.view_synthesis import iter_interpolate, source_mesh
 
-        view_a, view_b = _check_pair(path_a, load_view(path_a), path_b, load_view(path_b))
+        view_a, view_b = _check_pair(path_a, load_view(path_a), path_b, load_view(path_b), args.method)
         # the inputs read: say that numba compiles (not before a view without depth is refused)
         modules, warm = first_run_kernels(args)
         with_depth = view_a.depth is not None and view_b.depth is not None

@@ -49,7 +49,7 @@ def run(args) -> int:
     import time
     from pathlib import Path
 
-    from commands._common import info, note_first_run
+    from commands._common import check_source_depth, info, note_first_run
     from ibr.base.validate import check_image_size
     from ibr.io import load_view, write_image
     from ibr.io.mesh_files import write_obj, write_ply, write_segmentation_png
@@ -74,6 +74,7 @@ def run(args) -> int:
         from ibr.mesh.quad_mesh import build_mesh  # after cli.main started the helper (numba: 0.3 s)
 
         view = load_view(args.view)
+        check_source_depth("VIEW", args.view, view, purpose="so it has no mesh")
         # the input read: say that numba compiles (not before a view without depth is refused)
         modules, warm = first_run_kernels(args)
         note_first_run(*modules, warm=warm, announce=view.depth is not None)

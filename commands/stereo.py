@@ -106,7 +106,7 @@ def run(args) -> int:
         depth = view.require_depth("ibr stereo")
         valid = depth[np.isfinite(depth)]
         if valid.size == 0:
-            raise ValueError(no_valid_depth_message(view))
+            raise ValueError(no_valid_depth_message(view, who=f"VIEW: {args.view}"))  # the file, not its 'name'
         z_near, z_far = np.percentile(valid, [1, 99])
         if args.f is None:
             e, f = auto_stereo(depth, max_angle_deg=args.max_angle)

@@ -67,7 +67,8 @@ def run(args) -> int:
 
     import numpy as np
 
-    from commands._common import holes_summary, image_for, info, invented, invented_warning, note_first_run
+    from commands._common import (check_source_depth, holes_summary, image_for, info, invented, invented_warning,
+                                  note_first_run)
     from commands.interpolate import _to_float
     from ibr.base.view import View
     from ibr.io import load_view, write_depth, write_image
@@ -85,6 +86,8 @@ def run(args) -> int:
 
         view = load_view(args.view)
         target = load_camera(args.to)
+        if args.method == "mesh":  # (the forward splat of such a view is all holes, as the library's)
+            check_source_depth("VIEW", args.view, view)
         kernels = first_run_kernels(args)
         if kernels is not None:  # the inputs read: say that numba compiles (not before a view
             modules, warm = kernels  # without depth is refused)
@@ -111,9 +114,9 @@ def run(args) -> int:
             write_image(plan.stage(holes_out), (result.holes * 255).astype(np.uint8))
         written = plan.commit()
     info(line)
-    info(f"wrote {', '.join(map(str, written))}")
     warning = invented_warning("warp", [("", *invented(result))],
                                hint="does the --to camera see what VIEW shows?")
     if warning:  # exit 0 all the same: the picture is written, mostly a guess
         info(warning)
     return 0
+    info(f"wrote {', '.join(map(str, written))}")

@@ -423,14 +423,19 @@ _add("stereo --auto with --e", C, "error", r"--auto: give either --auto or --e/-
 _add("stereo --e without --f", C, "error", r"--e: needs --f", argv=("stereo", "{d}/a.json", "--e", "0.1", "-o", "{d}/s.png"))
 _add("stereo --e absurd for --f", C, "error", r"e: the zero-parallax shift .* exceeds 10 image widths",
      argv=("stereo", "{d}/a.json", "--e", "1e6", "--f", "1", "-o", "{d}/s.png"))
-_add("stereo on all-NaN depth", C, "error", r"view 'nan': the depth has no valid pixel", argv=("stereo", "{d}/nan.json", "-o",
+_add("stereo on all-NaN depth", C, "error", r"VIEW: \S*/nan.json: the depth has no valid pixel", argv=("stereo", "{d}/nan.json", "-o",
      "{d}/s.png"))
 _add("stereo on depth 1e30", C, "error", r"nan.json|far.json: depth: valid values must lie in \[1e-06, 1e\+09\]",
      argv=("stereo", "{d}/far.json", "-o", "{d}/s.png"), issue=True)
 _add("warp on depth 1e-30", C, "error", r"near.json: depth: valid values must lie in", argv=("warp", "{d}/near.json", "--to",
      "{d}/b.json", "-o", "{d}/o.png"), issue=True)
-_add("warp on all-NaN depth", C, "error", r"view 'nan': the depth has no valid pixel \(NaN, zero, negative or infinite everywhere\), so it cannot be a source", argv=("warp", "{d}/nan.json", "--to", "{d}/b.json", "-o",
+_add("warp on all-NaN depth", C, "error", r"VIEW: \S*/nan.json: the depth has no valid pixel \(NaN, zero, negative or infinite everywhere\), so it cannot be a source", argv=("warp", "{d}/nan.json", "--to", "{d}/b.json", "-o",
      "{d}/o.png"))
+_add("interpolate B on all-NaN depth (the file named, not its 'name')", C, "error",
+     r"error: B: \S*/nan.json: the depth has no valid pixel", argv=("interpolate", "{d}/a.json", "{d}/nan.json", "--out", "{d}/fr"),
+     extra={"absent": ("fr",)})
+_add("mesh on all-NaN depth", C, "error", r"error: VIEW: \S*/nan.json: the depth has no valid pixel .*so it has no mesh",
+     argv=("mesh", "{d}/nan.json", "--viz", "{d}/seg.png"), extra={"absent": ("seg.png",)})
 _add("warp --method unknown", U, "usage", r"argument --method: invalid choice", argv=("warp", "{d}/a.json", "--to", "{d}/b.json",
      "-o", "{d}/o.png", "--method", "magic"))
 _add("warp without --to", U, "usage", r"the following arguments are required: --to", argv=("warp", "{d}/a.json", "-o", "{d}/o.png"))

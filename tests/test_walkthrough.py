@@ -145,3 +145,26 @@ def test_mesh_help_names_the_texture_and_material_files(capsys):
     assert cli.main(["mesh", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "OUT.mtl and the texture OUT_texture.png" in text and "the texture OUT_texture.png beside it" in text
+
+
+# --------------------------------------------------------------------------- 3: all-NaN depth names the file
+@pytest.mark.parametrize("command", ["warp", "interpolate", "mesh", "stereo"])
+def test_a_depth_without_valid_pixels_is_refused_naming_the_file_not_the_view_name(tmp_path, capsys, command):
+    from ibr.io import write_depth
+
+    view = _copy_view(DATA / "room_a.json", tmp_path, "room_a_nandepth.json")
+    doc = json.loads(view.read_text())
+    write_depth(tmp_path / "nan.exr", np.full((doc["camera"]["height"], doc["camera"]["width"]), np.nan, np.float32))
+    doc["depth"] = {"path": "nan.exr", "encoding": "z"}  # its 'name' is still room_a
+    view.write_text(json.dumps(doc))
+    out = tmp_path / "o"
+    argv = {"warp": ["warp", str(view), "--to", str(DATA / "room_b.json"), "-o", str(out) + ".png"],
+            "interpolate": ["interpolate", str(DATA / "room_a.json"), str(view), "--out", str(out)],
+            "mesh": ["mesh", str(view), "--viz", str(out) + ".png"],
+            "stereo": ["stereo", str(view), "--auto", "-o", str(out) + ".png"]}[command]
+    assert cli.main(argv) == 1
+    err = capsys.readouterr().err
+    who = "B" if command == "interpolate" else "VIEW"
+    assert f"ibr {command}: error: {who}: {view}: the depth has no valid pixel (NaN, zero, negative or infinite " \
+           "everywhere)" in err, err
+    assert "room_a'" not in err and not list(tmp_path.glob("o*"))

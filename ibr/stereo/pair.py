@@ -223,9 +223,11 @@ def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, me
     return layer.color, layer.depth, layer.coverage
 
 
-def no_valid_depth_message(view: View) -> str:
-    """The error for a view whose depth has no valid pixel (library and CLI say the same)."""
-    return f"view {view.name!r}: the depth has no valid pixel (NaN, zero, negative or infinite everywhere); a stereo pair needs depth"
+def no_valid_depth_message(view: View, who: str | None = None) -> str:
+    """The error for a view whose depth has no valid pixel (library and CLI say the same), naming
+    the view as ``who`` (the CLI: ``"VIEW: path/to/view.json"``), else by its name."""
+    who = who or f"view {view.name!r}"
+    return f"{who}: the depth has no valid pixel (NaN, zero, negative or infinite everywhere); a stereo pair needs depth"
 
 
 def check_stereo_supersample(supersample, method: str) -> int:
