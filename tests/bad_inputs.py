@@ -338,6 +338,13 @@ _add("interpolate --video onto A's colour", O, "error", r"--video: .*has the ext
      argv=("interpolate", "{d}/a.json", "{d}/b.json", "--out", "{d}/fr", "--video", "{d}/a_color.png"))
 _add("interpolate --video .txt", O, "error", r"--video: .*v.txt has the extension '.txt'; expected one of .mp4",
      argv=("interpolate", "{d}/a.json", "{d}/b.json", "--out", "{d}/fr", "--video", "{d}/v.txt"))
+_add("interpolate --contact-sheet inside the new --out", O, "ok", r"wrote contact sheet .*fr/sheet.png",
+     argv=("interpolate", "{d}/a.json", "{d}/b.json", "--out", "{d}/fr", "--frames", "2", "--contact-sheet", "{d}/fr/sheet.png"),
+     extra={"changes": ("fr",)})
+_add("interpolate --contact-sheet in a missing folder inside the new --out", O, "error",
+     r"--contact-sheet: the output folder .*fr/sub of .*sheet.png does not exist",
+     argv=("interpolate", "{d}/a.json", "{d}/b.json", "--out", "{d}/fr", "--contact-sheet", "{d}/fr/sub/sheet.png"),
+     extra={"absent": ("fr",)})
 _add("interpolate --contact-sheet .exr", O, "error", r"--contact-sheet: .* has the extension '.exr'",
      argv=("interpolate", "{d}/a.json", "{d}/b.json", "--out", "{d}/fr", "--contact-sheet", "{d}/c.exr"))
 _add("interpolate --out holds an input of the frame pattern", O, "error", r"--out: .*frame_000_t0.000.png.* is the input",

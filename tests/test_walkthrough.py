@@ -168,3 +168,46 @@ def test_a_depth_without_valid_pixels_is_refused_naming_the_file_not_the_view_na
     assert f"ibr {command}: error: {who}: {view}: the depth has no valid pixel (NaN, zero, negative or infinite " \
            "everywhere)" in err, err
     assert "room_a'" not in err and not list(tmp_path.glob("o*"))
+
+
+# --------------------------------------------------------------------------- 4: a file inside the new --out
+def test_contact_sheet_inside_the_new_out_folder(tmp_path, capsys):
+    out = tmp_path / "o_f5"
+    argv = ["interpolate", str(DATA / "room_a.json"), str(DATA / "room_b.json"), "--frames", "5", "--out", str(out),
+            "--contact-sheet", str(out / "sheet.png")]
+    assert cli.main(argv) == 0
+    assert sorted(p.name for p in out.iterdir()) == [f"frame_00{i}_t{i / 4:.3f}.png" for i in range(5)] + ["sheet.png"]
+    assert f"wrote contact sheet {out / 'sheet.png'}" in capsys.readouterr().err
+    assert [p.name for p in tmp_path.iterdir()] == ["o_f5"]  # no staging folder left
+    assert cli.main(argv) == 0  # a second run: the folder exists, the sheet is replaced
+    assert len(list(out.iterdir())) == 6
+
+
+def test_output_plan_stages_a_file_in_a_frame_folder_it_creates(tmp_path):
+    from ibr.io.outputs import OutputPlan
+
+    for finish in ("commit", "fail"):
+        folder = tmp_path / finish / "new"
+        (tmp_path / finish).mkdir()
+        try:
+            with OutputPlan("test") as plan:
+                frames = plan.add_folder("--out", folder, ("frame_#.png",))
+                sheet = plan.add_file("--sheet", folder / "sheet.png", (".png",))
+                plan.check()
+                (plan.stage(frames, "frame_1.png")).write_bytes(b"f")
+                plan.stage(sheet).write_bytes(b"s")
+                if finish == "fail":
+                    raise RuntimeError("the work failed")
+                written = plan.commit()
+        except RuntimeError:
+            pass
+        if finish == "commit":
+            assert (folder / "sheet.png").read_bytes() == b"s" and (folder / "frame_1.png").read_bytes() == b"f"
+            assert folder / "sheet.png" in written
+        else:  # nothing half-written: no folder, no staging
+            assert list((tmp_path / finish).iterdir()) == []
+    with OutputPlan("test") as plan:  # a file in a folder that nothing creates is still refused
+        plan.add_folder("--out", tmp_path / "x", ("frame_#.png",))
+        plan.add_file("--sheet", tmp_path / "y" / "sheet.png", (".png",))
+        with pytest.raises(FileNotFoundError, match=r"--sheet: the output folder .*y of .*sheet.png does not exist"):
+            plan.check()

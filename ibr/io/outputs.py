@@ -31,8 +31,9 @@ What :meth:`~OutputPlan.check` refuses (each message names the option and the us
 * an extension the output cannot be written as (``ValueError``; no extension, ``.bmp``, ``.gif`` ...);
 * a file output that is an existing folder (``IsADirectoryError``), a folder output that is an
   existing file (``NotADirectoryError``), a file whose folder does not exist
-  (``FileNotFoundError``), a folder that cannot be written (``PermissionError``: the plan creates
-  its staging folder there, which proves it can);
+  (``FileNotFoundError``; unless that folder is a new frame folder of the same plan: the file is
+  staged in it and appears with it), a folder that cannot be written (``PermissionError``: the
+  plan creates its staging folder there, which proves it can);
 * an output equal -- after resolving symbolic links, or as the same inode (hard links) -- to any
   input, including the colour and depth files a view file names (``ValueError``);
 * two outputs on the same path (``ValueError``);
@@ -180,6 +181,7 @@ class _Output:
     names: list[str] = field(default_factory=list)   # files staged into a frame folder
     create: bool = False            # the frame folder does not exist yet
     anchor: Path | None = None      # nearest existing ancestor of a new frame folder
+    inside: "_Output | None" = None  # a file output in a frame folder this plan creates
 
 
 class OutputPlan:
@@ -300,8 +302,13 @@ class OutputPlan:
         if p.is_dir():
             raise IsADirectoryError(f"{o.option}: {p} is a folder, expected a file name")
         folder = p.parent
+        o.inside = None
         if not folder.is_dir():
-            raise FileNotFoundError(f"{o.option}: the output folder {folder} of {p} does not exist")
+            # a file in a frame folder the plan creates (--contact-sheet OUT/sheet.png with --out OUT)
+            o.inside = next((f for f in self.outputs if f.folder and not folder.exists()
+                             and os.path.realpath(f.path) == os.path.realpath(folder)), None)
+            if o.inside is None:
+                raise FileNotFoundError(f"{o.option}: the output folder {folder} of {p} does not exist")
         self._check_input_clash(o, p)
 
     def _check_folder(self, o: _Output) -> None:
@@ -389,6 +396,11 @@ class OutputPlan:
         for o in self.outputs:
             if o.folder:  # a frame folder gets a staging folder of its own
                 o.staged = self._staging_for(o, o.anchor if o.create else _abs(o.path), own=True)
+        for o in self.outputs:
+            if o.folder:
+                continue
+            if o.inside is not None:  # staged in the new folder's staging folder, renamed with it
+                o.staged = o.inside.staged / o.path.name
             else:
                 o.staged = self._staging_for(o, _abs(o.path).parent) / o.path.name
         self._checked = True
@@ -473,10 +485,12 @@ class OutputPlan:
             if not o.folder:
                 if not o.staged.is_file():
                     raise OSError(f"{o.option}: {o.path}: nothing was written")
-                moves.append((o.staged, o.path, o.staged.parent))
+                if o.inside is None:  # (a file inside a new frame folder comes with the folder)
+                    moves.append((o.staged, o.path, o.staged.parent))
                 continue
+            guests = {f.path.name for f in self.outputs if f.inside is o}
             o.names = sorted(e.name for e in os.scandir(o.staged))
-            odd = [n for n in o.names if not matches_patterns(n, o.patterns)]
+            odd = [n for n in o.names if not matches_patterns(n, o.patterns) and n not in guests]
             if odd:
                 raise ValueError(f"{o.option}: files {', '.join(odd)} do not follow the patterns "
                                  f"{', '.join(o.patterns)} of the frame folder")
@@ -538,7 +552,8 @@ class OutputPlan:
                              f"({', '.join(o.patterns)}; other files untouched)")
         self._cleanup()
         self._done = True
-        return [dst for _, dst, _ in moves] + [o.path for o in new_folders]
+        return ([dst for _, dst, _ in moves] + [o.path for o in new_folders]
+                + [o.path for o in self.outputs if o.inside is not None])
 
     def discard(self) -> None:
         """Remove everything staged; final paths are left exactly as they were."""
