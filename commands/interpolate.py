@@ -24,7 +24,7 @@ def add_arguments(parser) -> None:
                        help="interpolation parameters (0 = A, 1 = B; default 0.25 0.5 0.75)")
     parser.add_argument("--scene", default=None, metavar="NAME",
                         help=f"bundled sample scene when no view files are given (default {SAMPLE_SCENE})")
-    parser.add_argument("--out", default="out", metavar="DIR",
+    parser.add_argument("-o", "--out", default="out", metavar="DIR",
                         help="output folder (default: %(default)s); frames of an earlier run there "
                              "(frame_NNN_tT.TTT.png/.exr, _holes.png) are replaced, other files are left alone")
     parser.add_argument("--fill", choices=("previous", "inpaint", "none"), default="previous",
@@ -48,9 +48,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--video", metavar="OUT.mp4",
                         help="also write the frames as a video (OpenCV writer; .mp4, .m4v, .mov, .avi)")
     parser.add_argument("--fps", type=frame_rate, default=None,
-                        help="video frame rate (default 24; for a sequence: the manifest's fps x --factor, else 24)")
+                        help="frame rate of --video (only with --video; default 24; for a sequence: the manifest's "
+                             "fps x --factor, else 24)")
     parser.add_argument("--contact-sheet", metavar="SHEET.png",
-                        help="also write a contact sheet of all frames (.png, .jpg, .tif)")
+                        help="pairs only: also write a contact sheet of all frames (.png, .jpg, .tif; may be inside "
+                             "--out)")
     parser.add_argument("--holes", action="store_true",
                         help="also write each frame's hole mask (holes before filling) as a PNG")
     from commands._sequence import add_interpolate_arguments  # sequences: VIEW.json is a SEQ (#15)
@@ -292,6 +294,9 @@ def run(args) -> int:
     from ibr.io.outputs import OutputPlan, VIDEO_EXTS
     from commands._sequence import is_sequence_argument, run_interpolate  # sequences (#15)
 
+    if args.fps is not None and not args.video:  # it was silently ignored
+        raise ValueError(f"--fps: only used with --video (the video's frame rate); add --video OUT.mp4 or leave "
+                         f"--fps {args.fps:g} out")
     if len(args.views) == 1 and is_sequence_argument(args.views[0]):
         return run_interpolate(args)
     truth_paths = {}
@@ -308,11 +313,14 @@ def run(args) -> int:
     else:
         raise ValueError(f"views: expected two view files A.json B.json (or none), got {len(args.views)}")
     # the sequence options would be silently ignored for a pair (or the bundled pair)
-    for opt, given in (("--factor", args.factor is not None), ("--no-tail", args.no_tail),
-                       ("--report", args.report is not None)):
+    for opt, given, instead in (
+            ("--factor", args.factor is not None, "use --frames or --t for a pair"),
+            ("--no-tail", args.no_tail, "a pair has no extrapolated tail (its frames are --frames or --t)"),
+            ("--report", args.report is not None, "a pair's timing, holes and PSNR (with --truth) are printed, "
+                                                  "one line a frame")):
         if given:
             raise ValueError(f"{opt}: only used with a sequence (one manifest or folder of numbered views), "
-                             "not with two view files; use --frames or --t for a pair")
+                             f"not with two view files; {instead}")
 
     if args.frames is not None:
         if args.frames < 1:

@@ -380,6 +380,8 @@ _add("bench --out is a file", O, "error", r"--out: .* exists and is not a folder
 U = "cli"
 _add("interpolate --fps 0", U, "usage", r"argument --fps: expected a frame rate > 0",
      argv=("interpolate", "{d}/a.json", "{d}/b.json", "--frames", "24", "--video", "{d}/v.mp4", "--fps", "0"), issue=True)
+_add("interpolate --fps without --video", C, "error", r"--fps: only used with --video", argv=("interpolate", "{d}/a.json",
+     "{d}/b.json", "--fps", "30", "-o", "{d}/fr"), extra={"absent": ("fr",)})
 _add("interpolate --fps -1", U, "usage", r"argument --fps: expected a frame rate", argv=("interpolate", "--fps", "-1"))
 _add("interpolate --fps nan", U, "usage", r"argument --fps: expected a finite number", argv=("interpolate", "--fps", "nan"))
 _add("interpolate --fps inf", U, "usage", r"argument --fps: expected a finite number", argv=("interpolate", "--fps", "inf"))

@@ -211,3 +211,33 @@ def test_output_plan_stages_a_file_in_a_frame_folder_it_creates(tmp_path):
         plan.add_file("--sheet", tmp_path / "y" / "sheet.png", (".png",))
         with pytest.raises(FileNotFoundError, match=r"--sheet: the output folder .*y of .*sheet.png does not exist"):
             plan.check()
+
+
+# --------------------------------------------------------------------------- 5: interpolate's options
+def test_interpolate_o_is_out_and_fps_needs_a_video(tmp_path, capsys):
+    pair = [str(DATA / "room_a.json"), str(DATA / "room_b.json")]
+    assert cli.main(["interpolate", *pair, "--frames", "2", "-o", str(tmp_path / "f")]) == 0
+    assert sorted(p.name for p in (tmp_path / "f").iterdir()) == ["frame_000_t0.000.png", "frame_001_t1.000.png"]
+    capsys.readouterr()
+    assert cli.main(["interpolate", *pair, "--fps", "30", "-o", str(tmp_path / "g")]) == 1
+    err = capsys.readouterr().err
+    assert "ibr interpolate: error: --fps: only used with --video (the video's frame rate)" in err
+    assert not (tmp_path / "g").exists()
+
+
+def test_interpolate_report_on_a_pair_does_not_suggest_frames(tmp_path, capsys):
+    pair = [str(DATA / "room_a.json"), str(DATA / "room_b.json")]
+    assert cli.main(["interpolate", *pair, "--report", str(tmp_path / "r.json"), "-o", str(tmp_path / "f")]) == 1
+    err = capsys.readouterr().err
+    assert "error: --report: only used with a sequence" in err and "printed" in err
+    assert "--frames or --t" not in err
+    assert cli.main(["interpolate", *pair, "--factor", "2", "-o", str(tmp_path / "f")]) == 1
+    assert "use --frames or --t for a pair" in capsys.readouterr().err
+
+
+def test_interpolate_help_says_the_contact_sheet_is_for_pairs(capsys):
+    assert cli.main(["interpolate", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "-o DIR, --out DIR" in text
+    assert "--contact-sheet SHEET.png pairs only" in text
+    assert "frame rate of --video (only with --video" in text
