@@ -232,18 +232,19 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant0, quant2, out, depth, coverage, use_trust,
-                   ra, ua, va, rb, ub, vb, rim):
+                   ra, ua, va, rb, ub, vb, rim, row0):
     """Two-layer composite of 8-bit layers that ``cv2.remap`` sampled from colour + trust sources
     ((H, W, 4) uint8: three colour channels, then the trust in 1/255, see
     ``composite.rgbt_source``); the rule of :func:`sample_composite2` with the trust read from
     channel 3. ``ra``, ``rb`` (H_s, W_s) bool: each source's background rim, looked up at the
     nearest source pixel of the maps (ua, va), (ub, vb) where only one layer covers a pixel and a
-    4-neighbour is not covered by that layer (``use_trust`` only). ``out`` (H, W, 3) uint8. Rows ``v0 .. v1-1``."""
+    4-neighbour is not covered by that layer (``use_trust`` only). ``out`` (H, W, 3) uint8. Rows ``v0 .. v1-1``;
+    ``la``, ``lb`` hold rows ``row0 ..`` only (a chunk of rows sampled just before)."""
     w = out.shape[1]
     for v in range(v0, v1):
         # row views: with 2-D indexing in the pixel loop (numba cannot tell the arrays apart, so
         # every store reloads the 3-D strides) the kernel took 1.5x the time
-        lar, lbr, orow = la[v], lb[v], out[v]
+        lar, lbr, orow = la[v - row0], lb[v - row0], out[v]
         zar, zbr, drow, crow, rrow = za[v], zb[v], depth[v], coverage[v], rim[v]
         for u in range(w):
             rrow[u] = False

@@ -126,7 +126,7 @@ def upconvert(
     tail: bool = True,
     method: str = "mesh",
     composite_mode: str = "blend",
-    interpolation: str = "linear",
+    interpolation: str = "sharp",
     mesh_options: dict | None = None,
     supersample: int = 1,
 ) -> Iterator[SequenceFrame]:

@@ -1,0 +1,129 @@
+"""Sharp colour sampling at bilinear speed: bilinear taps on a source upsampled 2 x 2 once.
+
+Bilinear interpolation at a fractional offset is a low-pass filter: half-way between two pixels
+it averages them, and a rendered view whose pixels mostly fall between source pixels comes out
+visibly softer than the source (the synthetic pairs' textures lose 1-1.5 dB against their ground
+truth). Bicubic sampling keeps them crisp but costs 2.8x the 512x512 frame (OpenCV's bicubic
+remap has no SIMD path for 8-bit colour). Here each source is upsampled 2 x 2 once, by a
+co-sited Lanczos-3 interpolation (the source's own pixels stay at the even positions, the new
+ones are Lanczos-3 half-way samples), and every frame samples that image bilinearly at twice the
+map coordinates: the taps are then never more than a quarter source pixel from their position,
+so the blur of the bilinear weights is a quarter of what it was, and the sharpness is the
+Lanczos interpolation's. At a source pixel's own position (map coordinates integers) the result
+is that pixel exactly, so a view warped into its own camera comes back unchanged.
+
+Measured (``python benchmarks/bench_edges.py --quick``, issue 11; covered pixels of the bundled
+pairs, t = .25/.5/.75): see docs/render.md ("Sharp sampling").
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+__all__ = ["SHARP_SCALE", "depth_edges", "half_sample_kernel", "upsample_cosited"]
+
+#: The factor of the upsampled sources: map coordinates are multiplied by it (a power of two:
+#: the product, and its inverse back, are exact in float32).
+SHARP_SCALE = 2
+
+#: Lanczos window (lobes) of the half-way samples.
+_LANCZOS_A = 3
+
+
+def half_sample_kernel(a: int = _LANCZOS_A) -> np.ndarray:
+    """(2a,) float32: Lanczos-a weights of the samples at offsets -a+1 .. a from a position
+    half-way between sample 0 and sample 1 (normalized to sum 1)."""
+    x = np.arange(-a + 1, a + 1) - 0.5
+    k = np.sinc(x) * np.sinc(x / a)
+    return (k / k.sum()).astype(np.float32)
+
+
+_KERNEL = half_sample_kernel()
+
+
+def _half_way(image: np.ndarray, axis: int, edges: np.ndarray | None, dst: np.ndarray | None = None) -> np.ndarray:
+    """Samples half-way between each pixel and the next along ``axis`` (0 rows, 1 columns);
+    past the last pixel the border pixel repeats. Same dtype (rounded and saturated). Where one
+    of the six Lanczos taps lies on ``edges`` (a depth discontinuity) the sample is the plain
+    mean of its two pixels instead (bilinear: nothing is carried across a silhouette)."""
+    k = _KERNEL.reshape(1, -1) if axis == 1 else _KERNEL.reshape(-1, 1)
+    anchor = (_LANCZOS_A - 1, 0) if axis == 1 else (0, _LANCZOS_A - 1)  # taps at -a+1 .. a
+    if dst is None:
+        out = cv2.filter2D(image, -1, k, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
+    else:
+        out = cv2.filter2D(image, -1, k, dst=dst, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
+    if edges is not None and edges.any():
+        taps = np.ones((1, 2 * _LANCZOS_A) if axis == 1 else (2 * _LANCZOS_A, 1), np.uint8)
+        near = cv2.dilate(edges.view(np.uint8), taps, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
+        ys, xs = np.nonzero(near)  # few pixels: the mean there only (no image-sized temporaries)
+        ys1, xs1 = (ys, np.minimum(xs + 1, image.shape[1] - 1)) if axis == 1 else (np.minimum(ys + 1, image.shape[0] - 1), xs)
+        a, b = image[ys, xs], image[ys1, xs1]
+        if image.dtype.kind == "f":
+            out[ys, xs] = (a + b) * 0.5
+        else:  # rounded half up, as the filters round
+            out[ys, xs] = (a.astype(np.int32) + b + 1) >> 1
+    return out
+
+
+def upsample_cosited(image: np.ndarray, edges: np.ndarray | None = None) -> np.ndarray:
+    """``image`` upsampled 2 x 2, co-sited: output pixel (2y, 2x) is input pixel (y, x)
+    exactly; the others are Lanczos-3 half-way samples (separable; the border repeats), or the
+    mean of their two pixels where a tap lies on ``edges``.
+
+    Parameters
+    ----------
+    image : (H, W) or (H, W, C) array, C <= 4
+        uint8, uint16 or float32 (8-bit and 16-bit results are rounded and saturated).
+    edges : (H, W) bool, optional
+        Pixels beside a depth discontinuity (:func:`depth_edges`): no Lanczos tap reaches
+        across them.
+
+    Returns
+    -------
+    (2H, 2W[, C]) array of the same dtype. A map coordinate x of ``image`` (pixel centres at
+    integers) is 2x in the result.
+    """
+    img = np.asarray(image)
+    if img.ndim not in (2, 3) or (img.ndim == 3 and not 1 <= img.shape[2] <= 4) or min(img.shape[:2]) < 1:
+        raise ValueError(f"image: expected (H, W) or (H, W, C <= 4), got shape {img.shape}")
+    if img.dtype not in (np.uint8, np.uint16, np.float32):
+        raise ValueError(f"image: expected uint8, uint16 or float32, got {img.dtype}")
+    if edges is not None:
+        edges = np.ascontiguousarray(edges, dtype=bool)
+        if edges.shape != img.shape[:2]:
+            raise ValueError(f"edges: expected shape {img.shape[:2]}, got {edges.shape}")
+    if img.ndim == 3 and img.shape[2] == 1:  # OpenCV's filters return one channel as (H, W)
+        return upsample_cosited(img[..., 0], edges)[..., None]
+    img = np.ascontiguousarray(img)
+    h, w = img.shape[:2]
+    out = np.empty((2 * h, 2 * w, *img.shape[2:]), img.dtype)
+    even = out[0::2]  # rows of the source (each row contiguous: OpenCV reads and writes them in place)
+    even[:, 0::2] = img
+    even[:, 1::2] = _half_way(img, 1, edges)
+    odd = out[1::2]
+    edges2 = None if edges is None else np.repeat(edges, 2, axis=1)
+    if edges2 is not None:  # a half-way column touches the edges of both its pixels
+        edges2[:, 1::2] |= np.concatenate([edges[:, 1:], edges[:, -1:]], 1)
+    got = _half_way(even, 0, edges2, dst=odd)
+    if got is not odd and not np.shares_memory(got, odd):  # OpenCV could not write in place
+        odd[...] = got
+    return out
+
+
+def depth_edges(depth: np.ndarray, rel: float = 0.02) -> np.ndarray:
+    """(H, W) bool: pixels whose 4-neighbour lies more than ``rel`` away in inverse depth
+    (relative to the nearer), or whose depth or a 4-neighbour's is invalid (NaN, <= 0)."""
+    q = 1.0 / np.where(np.asarray(depth, np.float32) > 0, depth, np.nan)
+    e = np.zeros(q.shape, bool)
+    for axis in (0, 1):
+        a = q[:-1] if axis == 0 else q[:, :-1]
+        b = q[1:] if axis == 0 else q[:, 1:]
+        step = ~(np.abs(a - b) <= rel * np.maximum(a, b))  # NaN: a step
+        if axis == 0:
+            e[:-1] |= step
+            e[1:] |= step
+        else:
+            e[:, :-1] |= step
+            e[:, 1:] |= step
+    return e
