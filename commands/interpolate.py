@@ -238,6 +238,39 @@ def _truth_for_pair(truth, path_a, path_b, ts) -> dict:
     return found
 
 
+def truth_summary(scores) -> str:
+    """The "ground truth: mean PSNR ..." line of a pair's scored frames: the means over the new
+    frames only (0 < t < 1 and beyond: the key frames t = 0 and 1 are copies of A and B, exact,
+    and made a mean of ``inf dB``), an identical new frame left out of the PSNR mean (said), and
+    never ``inf``.
+
+    Parameters
+    ----------
+    scores : sequence of (t, psnr, ssim)
+        One per frame with a ground truth (PSNR ``inf`` for an identical frame).
+    """
+    import numpy as np
+
+    from commands._common import counted
+
+    new = [(p, s) for t, p, s in scores if not (abs(t) < 1e-9 or abs(t - 1) < 1e-9)]
+    keys = len(scores) - len(new)
+    left_out = (f" (the key {'frame' if keys == 1 else 'frames'} t = 0 / 1, copies of A / B, left out)"
+                if keys else "")
+    if not new:
+        return ("ground truth: only the key frames (t = 0 / 1, copies of A / B) have one; no new frame to "
+                "score (use --t or more --frames)")
+    ssim = float(np.mean([s for _, s in new]))
+    psnrs = [p for p, _ in new if np.isfinite(p)]
+    if not psnrs:
+        return f"ground truth: {counted(len(new), 'new frame')} identical to it (SSIM {ssim:.4f}){left_out}"
+    line = (f"ground truth: mean PSNR {np.mean(psnrs):.2f} dB, mean SSIM {ssim:.4f} over "
+            f"{counted(len(new), 'new frame')}")
+    if len(psnrs) < len(new):
+        line += f" ({len(new) - len(psnrs)} identical, left out of the PSNR mean)"
+    return line + left_out
+
+
 def _comparable(color, truth, path):
     """A frame and its ground truth with the same channels: an alpha channel of either is dropped
     (RGB against RGBA); otherwise the counts must agree (an error naming ``path``)."""
@@ -383,8 +416,9 @@ def run(args) -> int:
             truth = next((p for tt, p in truth_paths.items() if abs(tt - t) < 1e-9), None)
             if truth is not None:
                 psnr, ssim = _metrics(*_comparable(frame.color, load_view(truth).color, truth))
-                scores.append((psnr, ssim))
-                line += f", PSNR {psnr:.2f} dB, SSIM {ssim:.4f} vs {truth.name}"
+                scores.append((t, psnr, ssim))
+                line += (f", PSNR {psnr:.2f} dB, SSIM {ssim:.4f} vs {truth.name}" if np.isfinite(psnr)
+                         else f", identical to {truth.name}")  # (a key frame: PSNR infinite)
             if not long_run:
                 info(line)
             colors.append(frame.color)
@@ -409,9 +443,7 @@ def run(args) -> int:
     per = np.median(times[1:]) if len(times) > 1 else times[0]
     info(f"wrote {counted(len(ts), 'frame')} to {out}/ (median {per * 1e3:.1f} ms per frame, {first})")
     if scores:
-        p = np.array(scores)
-        info(f"ground truth: mean PSNR {p[:, 0].mean():.2f} dB, mean SSIM {p[:, 1].mean():.4f} "
-             f"over {counted(len(p), 'frame')}")
+        info(truth_summary(scores))
     elif truth_paths:  # e.g. the bundled pair with --frames 6: no frame at a ground-truth position
         at = ", ".join(f"{t:g}" for t in sorted(truth_paths))
         info(f"ground truth: none at these t (its views are at t = {at}); no PSNR/SSIM")

@@ -188,7 +188,7 @@ def test_interpolate_pair_scores_its_truth_by_camera_and_mixes_colour_types(tmp_
                      str(tmp_path / "o")]) == 0
     err = capsys.readouterr().err
     assert "A's colour is uint16, B's uint8: both used as float 0-1" in err
-    assert err.count("vs clutter_t050.json") == 1 and "over 1 frame" in err and "over 1 frames" not in err  # t = 0.5 only
+    assert err.count("vs clutter_t050.json") == 1 and "over 1 new frame" in err and "over 1 new frames" not in err  # t = 0.5 only
     psnr = float(err.split("mean PSNR ")[1].split(" dB")[0])
     assert psnr > 35.0  # the bundled pair scores 36.6 dB at t = 0.5
     assert cli.main(["interpolate", *args[:2], "--t", "0.4", "--truth", str(tmp_path / "clutter_t050.json"),

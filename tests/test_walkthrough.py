@@ -241,3 +241,35 @@ def test_interpolate_help_says_the_contact_sheet_is_for_pairs(capsys):
     assert "-o DIR, --out DIR" in text
     assert "--contact-sheet SHEET.png pairs only" in text
     assert "frame rate of --video (only with --video" in text
+
+
+# --------------------------------------------------------------------------- 7: PSNR over the new frames
+def test_interpolate_truth_mean_is_over_the_new_frames_and_never_inf(tmp_path, capsys):
+    from ibr.io import load_view
+    from ibr.sequence.files import save_sequence
+
+    names = ("room_a", "room_t025", "room_t050", "room_t075", "room_b")
+    save_sequence([load_view(DATA / f"{n}.json") for n in names], tmp_path / "truth.json")
+    pair = [str(DATA / "room_a.json"), str(DATA / "room_b.json")]
+    assert cli.main(["interpolate", *pair, "--frames", "5", "--truth", str(tmp_path / "truth.json"),
+                     "-o", str(tmp_path / "f")]) == 0
+    err = capsys.readouterr().err
+    assert not re.search(r"\binf\b", err)
+    per_frame = [float(x) for x in re.findall(r"t=0\.(?:250|500|750): .*PSNR (\d+\.\d+) dB", err)]
+    assert len(per_frame) == 3 and err.count("identical to truth_") == 2  # t = 0 and 1
+    m = re.search(r"ground truth: mean PSNR (\d+\.\d+) dB, mean SSIM 0\.\d{4} over 3 new frames \(the key frames "
+                  r"t = 0 / 1, copies of A / B, left out\)", err)
+    assert m, err
+    assert float(m.group(1)) == pytest.approx(np.mean(per_frame), abs=0.006)
+
+
+def test_truth_summary_leaves_out_key_and_identical_frames():
+    from commands.interpolate import truth_summary
+
+    assert truth_summary([(0.0, np.inf, 1.0), (0.5, 30.0, 0.9), (1.0, np.inf, 1.0)]) == (
+        "ground truth: mean PSNR 30.00 dB, mean SSIM 0.9000 over 1 new frame (the key frames t = 0 / 1, copies of "
+        "A / B, left out)")
+    assert truth_summary([(0.25, 30.0, 0.8), (0.5, np.inf, 1.0)]) == (
+        "ground truth: mean PSNR 30.00 dB, mean SSIM 0.9000 over 2 new frames (1 identical, left out of the PSNR mean)")
+    assert "no new frame to score" in truth_summary([(0.0, np.inf, 1.0), (1.0, np.inf, 1.0)])
+    assert not re.search(r"\binf\b", truth_summary([(0.5, np.inf, 1.0)]))
