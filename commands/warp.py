@@ -86,9 +86,9 @@ def run(args) -> int:
         from ibr.render.view_synthesis import source_mesh, warp  # after cli.main started the helper
 
         view = load_view(args.view)
-        target = load_camera(args.to)
         if args.method == "mesh":  # (the forward splat of such a view is all holes, as the library's)
             check_source_depth("VIEW", args.view, view)
+        target = load_camera(args.to)
         kernels = first_run_kernels(args)
         if kernels is not None:  # the inputs read: say that numba compiles (not before a view
             modules, warm = kernels  # without depth is refused)
@@ -119,5 +119,5 @@ def run(args) -> int:
                                hint="does the --to camera see what VIEW shows?")
     if warning:  # exit 0 all the same: the picture is written, mostly a guess
         info(warning)
-    return 0
     info(f"wrote {', '.join(map(str, written))}")
+    return 0
