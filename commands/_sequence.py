@@ -214,7 +214,7 @@ def run_interpolate(args) -> int:
     import numpy as np
 
     from ibr.io import load_view, write_image
-    from ibr.io.outputs import JSON_EXTS, VIDEO_EXTS, OutputPlan
+    from ibr.io.outputs import JSON_EXTS, VIDEO_EXTS, OutputPlan, number_width
     from ibr.sequence.files import iter_views, load_sequence
     from ibr.sequence.metrics import (frame_change, psnr, static_mask_from_motion, static_mask_from_truth,
                                       summarize_flicker)
@@ -258,7 +258,7 @@ def run_interpolate(args) -> int:
                     from commands.interpolate import FRAME_KERNELS
 
                     note_first_run(*FRAME_KERNELS, warm="frame")
-                name = f"frame_{fr.index:04d}"
+                name = f"frame_{fr.index:0{number_width(n_out)}d}"  # sorted by name in order
                 color = (_unit_float(r.color) if args.format == "exr" else _display(r.color))
                 write_image(plan.stage(out, name + ext), color)
                 if args.holes:
@@ -369,7 +369,7 @@ def run_stereo(args) -> int:
     import numpy as np
 
     from ibr.io import write_image
-    from ibr.io.outputs import VIDEO_EXTS, OutputPlan
+    from ibr.io.outputs import VIDEO_EXTS, OutputPlan, number_width
     from ibr.sequence.files import iter_views, load_sequence
     from ibr.sequence.metrics import frame_change, static_mask_from_motion, summarize_flicker
     from ibr.sequence.stereo import pool_depths, sequence_stereo_params, stereo_sequence
@@ -409,7 +409,7 @@ def run_stereo(args) -> int:
                                                      method=args.method, supersample=args.supersample)):
                 left, right = _display(pair.left), _display(pair.right)
                 packed = pack_stereo(left, right, args.mode)
-                name = f"stereo_{i:04d}"
+                name = f"stereo_{i:0{number_width(len(seq))}d}"
                 if args.mode == "separate":
                     write_image(plan.stage(out, name + "_left.png"), packed[0])
                     write_image(plan.stage(out, name + "_right.png"), packed[1])
@@ -512,7 +512,7 @@ def run_samples_sequence(args) -> int:
     """Write ``<scene>_walk.json`` (keys) and ``<scene>_truth.json`` (exact frames) into ``--out``."""
     from pathlib import Path
 
-    from ibr.io.outputs import OutputPlan
+    from ibr.io.outputs import OutputPlan, number_width
     from ibr.sequence.files import save_sequence
     from ibr.synth import SCENES, camera_path, make_scene, path_frame_cameras, render_path
 
@@ -548,7 +548,7 @@ def run_samples_sequence(args) -> int:
         keys = []
         truth = []
         for j, cam in enumerate(frames):
-            v = render_path(world, [cam], supersample=3, name=f"{truth_name}_{j:04d}")[0]
+            v = render_path(world, [cam], supersample=3, name=f"{truth_name}_{j:0{number_width(len(frames))}d}")[0]
             truth.append(v)
             if j % args.factor == 0:
                 keys.append(v)

@@ -2,7 +2,7 @@
 
 Without view files it runs on the bundled sample pair (``samples/data``, the clutter scene) at
 the ground-truth positions t = 0.25, 0.5, 0.75 and prints PSNR/SSIM against the bundled
-ground-truth views. Frames go to ``--out`` (default ``./out``) as ``frame_000_t0.250.png`` ...
+ground-truth views. Frames go to ``--out`` (default ``./out``) as ``frame_000_t0.250.png`` ... (more digits for more than 1000 frames).
 """
 
 from __future__ import annotations
@@ -324,7 +324,7 @@ def run(args) -> int:
 
     from commands._common import counted, holes_summary, info, invented, invented_warning, note_first_run, progress
     from ibr.io import load_view, write_image
-    from ibr.io.outputs import OutputPlan, VIDEO_EXTS
+    from ibr.io.outputs import OutputPlan, VIDEO_EXTS, number_width
     from commands._sequence import is_sequence_argument, run_interpolate  # sequences (#15)
 
     if args.fps is not None and not args.video:  # it was silently ignored
@@ -403,11 +403,12 @@ def run(args) -> int:
             frames_iter = progress(frames_iter, len(ts), "interpolate")
         times, colors, labels, scores, guessed = [], [], [], [], []
         ext = "." + args.format
+        digits = number_width(len(ts), 3)  # frame_1000_... sorts after frame_0999_..., not before frame_100_...
         t_prev = time.perf_counter()
         for i, (frame, t) in enumerate(zip(frames_iter, ts)):  # frames first: the bar draws its last step
             dt = time.perf_counter() - t_prev
             times.append(dt)
-            name = f"frame_{i:03d}_t{t:.3f}"
+            name = f"frame_{i:0{digits}d}_t{t:.3f}"
             color = _to_float(frame.color) if args.format == "exr" else _to_png(frame.color)
             write_image(plan.stage(out, name + ext), color)
             if args.holes:

@@ -220,7 +220,7 @@ def _run_sequences(args) -> int:
     """One rig camera per sequence: frame k stitches view k of every sequence into -o FOLDER."""
     from commands._common import info, note_first_run, progress
     from ibr.io import load_view
-    from ibr.io.outputs import OutputPlan
+    from ibr.io.outputs import OutputPlan, number_width
     from ibr.sequence import load_sequence
 
     if args.panorama or args.holes_out or (args.depth_out not in (None, "none")):
@@ -245,8 +245,9 @@ def _run_sequences(args) -> int:
             _resolve_width(args, views, None)  # from the first frame's views, then kept
             note_first_run(*modules, warm=warm)  # the first inputs read: say that numba compiles (once)
             packed, z, holes, seen = _stitch_frame(args, views, None, None)
-            _write(plan, plan.stage(folder, f"pano_{k:04d}.png"),
-                   plan.stage(folder, f"pano_{k:04d}_depth.exr") if depth else None, None, packed, z, holes)
+            name = f"pano_{k:0{number_width(frames)}d}"
+            _write(plan, plan.stage(folder, f"{name}.png"),
+                   plan.stage(folder, f"{name}_depth.exr") if depth else None, None, packed, z, holes)
         info(f"stitch: {frames} frames of {_describe(args, len(seqs), seen, False)} (last frame)")
         plan.commit()
     info(f"wrote {frames} panoramas to {Path(args.output)}/")

@@ -71,7 +71,7 @@ def run(args) -> int:
 
     from commands._common import image_for, info, progress
     from ibr.io import load_view, write_image
-    from ibr.io.outputs import OutputPlan
+    from ibr.io.outputs import OutputPlan, number_width
     from ibr.stereo.timewarp import timewarp, timewarp_mode
 
     with OutputPlan("ibr timewarp", log=info) as plan:
@@ -100,7 +100,7 @@ def run(args) -> int:
                                      ) from None
         for i, c in progress(enumerate(cams), len(cams), "timewarp"):
             fr = timewarp(view, c, mode=args.mode)
-            path = plan.stage(out, f"frame_{i:04d}.png")
+            path = plan.stage(out, f"frame_{i:0{number_width(len(cams))}d}.png")
             write_image(path, image_for(path, fr.color))
             if fr.outside.any():
                 info(f"timewarp: frame {i}: {fr.outside.mean():.1%} beyond the guard band (edge replicated)")

@@ -296,7 +296,7 @@ def run(args) -> int:
     import panorama
     from commands._common import image_for
     from ibr.io import write_image
-    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan
+    from ibr.io.outputs import ANIMATION_EXTS, IMAGE_EXTS, OutputPlan, number_width
     from commands._common import read_panorama_arg
     from ibr.io.images import check_unit_colour
     from panorama.viewer import to_uint8, tour_views
@@ -368,7 +368,7 @@ def run(args) -> int:
                          for a, b in zip(tour_views(eyes[0], args.tour, **kw), tour_views(eyes[1], args.tour, **kw)))
             for k, view in enumerate(progress(views, args.tour, "tour")):
                 frame = to_uint8(view)
-                write_image(plan.stage(frames, f"frame_{k:04d}.png"), frame)
+                write_image(plan.stage(frames, f"frame_{k:0{number_width(args.tour)}d}.png"), frame)
                 if anim:  # only an animation needs the frames in memory (1000 large frames did not fit)
                     kept.append(frame)
             if anim:

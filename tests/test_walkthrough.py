@@ -273,3 +273,31 @@ def test_truth_summary_leaves_out_key_and_identical_frames():
         "ground truth: mean PSNR 30.00 dB, mean SSIM 0.9000 over 2 new frames (1 identical, left out of the PSNR mean)")
     assert "no new frame to score" in truth_summary([(0.0, np.inf, 1.0), (1.0, np.inf, 1.0)])
     assert not re.search(r"\binf\b", truth_summary([(0.5, np.inf, 1.0)]))
+
+
+# --------------------------------------------------------------------------- 6: frame names sort in order
+def test_number_width_pads_to_the_count():
+    from ibr.io.outputs import number_width
+
+    assert [number_width(n, 3) for n in (1, 5, 1000, 1001, 10001)] == [3, 3, 3, 4, 5]
+    assert [number_width(n) for n in (0, 10000, 10001, 100000)] == [4, 4, 5, 5]
+
+
+def test_interpolate_1001_frames_sort_by_name_in_order(tmp_path, capsys):
+    from ibr.base.view import View
+    from ibr.io import save_view
+    from ibr.synth import make_scene, render, scene_cameras
+
+    scene = make_scene("room")
+    for cam, name in zip(scene_cameras("room", width=16, height=12), ("a", "b")):
+        v = render(scene, cam, name=name)
+        save_view(View((np.clip(v.color, 0, 1) * 255 + 0.5).astype(np.uint8), v.depth, v.camera, name),
+                  tmp_path / f"{name}.json")
+    out = tmp_path / "f"
+    assert cli.main(["interpolate", str(tmp_path / "a.json"), str(tmp_path / "b.json"), "--frames", "1001",
+                     "--fill", "none", "-o", str(out)]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert len(names) == 1001
+    assert names[0] == "frame_0000_t0.000.png" and names[100] == "frame_0100_t0.100.png"
+    assert names[-1] == "frame_1000_t1.000.png"
+    assert [int(n.split("_")[1]) for n in names] == list(range(1001))  # name order is frame order

@@ -81,6 +81,7 @@ __all__ = [
     "VIDEO_EXTS",
     "same_file",
     "matches_patterns",
+    "number_width",
 ]
 
 #: Extensions :func:`ibr.io.write_image` writes (the dtype rules are checked by the writer).
@@ -94,6 +95,14 @@ ANIMATION_EXTS = (".gif",) + VIDEO_EXTS
 JSON_EXTS = (".json",)
 
 STAGING_PREFIX = ".ibr-staging-"
+
+
+def number_width(count: int, at_least: int = 4) -> int:
+    """Digits of the numbers 0 .. ``count`` - 1 in file names, zero-padded so that the names sort
+    in number order (``frame_0999``, ``frame_1000``; 1001 frames at 3 digits put
+    ``frame_1000_...`` before ``frame_100_...``): the width of ``count - 1``, at least
+    ``at_least``. Readers take any width (``#`` in :func:`matches_patterns`, ``\\d+``)."""
+    return max(int(at_least), len(str(max(int(count) - 1, 0))))
 
 
 def _abs(path: Path) -> Path:

@@ -201,7 +201,8 @@ def save_sequence(views: Iterable[View], manifest, *, name: str | None = None, f
         Frames in time order (written one at a time, so a generator keeps memory flat).
     manifest : str or Path
         The ``.json`` manifest to write; its folder must exist. View ``i`` is written as
-        ``<manifest stem>_<i:04d>.json`` with its color and depth files.
+        ``<manifest stem>_<i:04d>.json`` with its color and depth files (more digits for more
+        than 10000 views in a list, so that the names sort in order; :func:`ibr.io.outputs.number_width`).
     name, fps, ground_truth
         Manifest fields (module docstring); ``ground_truth`` as ``{"sequence": ..., "factor": F}``.
 
@@ -226,9 +227,12 @@ def save_sequence(views: Iterable[View], manifest, *, name: str | None = None, f
         if not isinstance(ground_truth["sequence"], str) or isinstance(gf, bool) or not isinstance(gf, int) or gf < 1:
             raise ValueError(f"ground_truth: expected {{'sequence': file name, 'factor': integer >= 1}}, "
                              f"got {ground_truth!r}")
+    from ibr.io.outputs import number_width
+
     names = []
+    digits = number_width(len(views)) if hasattr(views, "__len__") else 4  # (a generator: 4)
     for i, view in enumerate(views):
-        path = manifest.parent / f"{manifest.stem}_{i:04d}.json"
+        path = manifest.parent / f"{manifest.stem}_{i:0{digits}d}.json"
         save_view(view, path)
         names.append(path.name)
     if not names:
