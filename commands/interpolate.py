@@ -10,6 +10,8 @@ from __future__ import annotations
 HELP = "render intermediate views between two RGB-D views (no arguments: the bundled sample pair)"
 
 SAMPLE_SCENE = "clutter"
+#: The bundled scenes (samples/data/manifest.json's "scenes"; a test keeps the two in step).
+SAMPLE_SCENES = ("room", "clutter", "grazing")
 
 
 def add_arguments(parser) -> None:
@@ -22,8 +24,9 @@ def add_arguments(parser) -> None:
                        help="N frames evenly spaced from A to B, both included (t = i / (N - 1); N = 1: t = 0.5)")
     where.add_argument("--t", type=finite_float, nargs="+", metavar="T",
                        help="interpolation parameters (0 = A, 1 = B; default 0.25 0.5 0.75)")
-    parser.add_argument("--scene", default=None, metavar="NAME",
-                        help=f"bundled sample scene when no view files are given (default {SAMPLE_SCENE})")
+    parser.add_argument("--scene", default=None, choices=SAMPLE_SCENES,
+                        help=f"bundled sample scene when no view files are given: {', '.join(SAMPLE_SCENES)} "
+                             f"(default {SAMPLE_SCENE})")
     parser.add_argument("-o", "--out", default="out", metavar="DIR",
                         help="output folder (default: %(default)s); frames of an earlier run there "
                              "(frame_NNN_tT.TTT.png/.exr, _holes.png) are replaced, other files are left alone")

@@ -402,7 +402,8 @@ _add("interpolate three views", C, "error", r"views: expected two view files", a
      "{d}/a.json"))
 _add("interpolate --scene with views", C, "error", r"--scene: only used without view files",
      argv=("interpolate", "{d}/a.json", "{d}/b.json", "--scene", "room", "--out", "{d}/fr"))
-_add("interpolate unknown --scene", C, "error", r"--scene: expected one of", argv=("interpolate", "--scene", "nope", "--out", "{d}/fr"))
+_add("interpolate unknown --scene", U, "usage", r"argument --scene: invalid choice: 'nope' \(choose from 'room', 'clutter', "
+     r"'grazing'\)", argv=("interpolate", "--scene", "nope", "--out", "{d}/fr"), extra={"absent": ("fr",)})
 _add("interpolate --t outside [0, 1] (extrapolation)", C, "ok", r"wrote 1 frame ",
      argv=("interpolate", "{d}/a.json", "{d}/b.json", "--t", "1.25", "--out", "{d}/fr"), extra={"changes": ("fr",)})
 _add("mesh --viz-scale 1000", U, "usage", r"argument --viz-scale: expected a scale >= 1 and <= 64", argv=("mesh", "{d}/a.json",

@@ -301,3 +301,18 @@ def test_interpolate_1001_frames_sort_by_name_in_order(tmp_path, capsys):
     assert names[0] == "frame_0000_t0.000.png" and names[100] == "frame_0100_t0.100.png"
     assert names[-1] == "frame_1000_t1.000.png"
     assert [int(n.split("_")[1]) for n in names] == list(range(1001))  # name order is frame order
+
+
+# --------------------------------------------------------------------------- 8: --scene is a choice
+def test_interpolate_scene_is_a_parser_choice_of_the_bundled_scenes(tmp_path, capsys):
+    from commands.interpolate import SAMPLE_SCENES
+
+    assert list(SAMPLE_SCENES) == list(json.loads((DATA / "manifest.json").read_text())["scenes"])
+    assert cli.main(["interpolate", "--scene", "nope", "-o", str(tmp_path / "f")]) == 2
+    assert "argument --scene: invalid choice: 'nope' (choose from 'room', 'clutter', 'grazing')" in \
+        capsys.readouterr().err
+    assert not (tmp_path / "f").exists()
+    assert cli.main(["interpolate", "--help"]) == 0
+    assert "--scene {room,clutter,grazing}" in capsys.readouterr().out
+    assert cli.main(["interpolate", "--scene", "grazing", "--t", "0.5", "-o", str(tmp_path / "f")]) == 0
+    assert "bundled sample pair grazing_a.json / grazing_b.json" in capsys.readouterr().err
