@@ -91,11 +91,19 @@ def run(args) -> int:
              f"one-pixel quads {mesh.one_pixel_share:.1%}, method {i['method']}")
         if i["tolerance_inv_depth"] is not None:
             bound = f"max |error in 1/z| {i['tolerance_inv_depth']:.4g}"
-            if i["max_error_px"] is not None:
-                bound += f" (= {i['max_error_px']:g} px for a baseline of {i['baseline']:.4g})"
+            quant = i["quantization"]
+            if i["guaranteed_px"] is not None:
+                bound += f" (= {i['guaranteed_px']:.3g} px for a baseline of {i['baseline']:.4g}"
+                if quant is not None and i["quantization_allowance_inv_depth"]:
+                    bound += f": {i['max_error_px']:g} px plus half a code of the depth's quantization"
+                bound += ")"
+            if quant is not None:  # recorded by load_view from the file's encoding
+                bound += f"; the file's depth quantization ({quant.describe()}) applied"
             info(f"mesh: guaranteed {bound}")
         else:
-            info(f"mesh: threshold {i['threshold_zprime']:.6g} in z' units (near {i['near']:.4g}, far {i['far']:.4g})")
+            info(f"mesh: threshold {i['threshold_zprime']:.6g} in z' units (near {i['near']:.4g}, far {i['far']:.4g})"
+                 + (f"; the file's depth quantization ({i['quantization'].describe()}) applied: second differences "
+                    "of up to 1.5 codes split nothing" if i["quantization"] is not None else ""))
         info(f"mesh: segmentation {i['seconds_segment'] * 1e3:.1f} ms, total {seconds * 1e3:.1f} ms "
              "(first call includes loading the compiled kernels)")
 

@@ -316,3 +316,49 @@ def test_interpolate_scene_is_a_parser_choice_of_the_bundled_scenes(tmp_path, ca
     assert "--scene {room,clutter,grazing}" in capsys.readouterr().out
     assert cli.main(["interpolate", "--scene", "grazing", "--t", "0.5", "-o", str(tmp_path / "f")]) == 0
     assert "bundled sample pair grazing_a.json / grazing_b.json" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- 9: the quantized bound in px
+def _quantized_room(folder: Path) -> Path:
+    from ibr.io import load_view, write_depth
+
+    view = _copy_view(DATA / "room_a.json", folder, "room_q.json")
+    write_depth(folder / "room_q_depth.png", load_view(DATA / "room_a.json").depth, scale=0.05)  # 5 cm codes
+    doc = json.loads(view.read_text())
+    doc["depth"] = {"path": "room_q_depth.png", "encoding": "z", "scale": 0.05}
+    view.write_text(json.dumps(doc))
+    return view
+
+
+def test_mesh_bound_in_px_includes_half_a_code_of_the_file_quantization(tmp_path, capsys):
+    from ibr.base.depth import quantization_of
+    from ibr.io import load_view
+    from ibr.mesh.quad_mesh import build_mesh
+
+    view = load_view(_quantized_room(tmp_path))
+    q = quantization_of(view)
+    mesh = build_mesh(view)
+    i, f = mesh.info, max(view.camera.fx, view.camera.fy)
+    half_code_px = 0.5 * q.max_inv_step(view.depth) * f * i["baseline"]
+    assert half_code_px > 0.3  # 5 cm codes at 3-6 m: a third of a pixel and more
+    assert i["guaranteed_px"] == pytest.approx(0.5 + half_code_px, rel=1e-9)
+    assert i["guaranteed_px"] == pytest.approx(i["tolerance_inv_depth"] * f * i["baseline"], rel=1e-12)
+    exact = build_mesh(load_view(DATA / "room_a.json")).info
+    assert exact["guaranteed_px"] == pytest.approx(0.5, rel=1e-12) and exact["quantization_allowance_inv_depth"] == 0
+
+    assert cli.main(["mesh", str(tmp_path / "room_q.json")]) == 0
+    err = capsys.readouterr().err
+    m = re.search(r"guaranteed max \|error in 1/z\| (\S+) \(= (\S+) px for a baseline of ([0-9.]+): 0.5 px plus half a "
+                  r"code of the depth's quantization\); the file's depth quantization \(depth codes of 0.05 scene "
+                  r"units\) applied", err)
+    assert m, err
+    tol, px, b = map(float, m.groups())
+    assert px == pytest.approx(tol * f * b, rel=2e-3) and px > 0.8
+
+
+def test_depth_quantization_describes_itself():
+    from ibr.base.depth import DepthQuantization
+
+    assert DepthQuantization.codes(0.05).describe() == "depth codes of 0.05 scene units"
+    assert DepthQuantization.disparity(baseline=0.2, focal_px=500).describe() == "codes of 0.01 in 1/z"
+    assert DepthQuantization().describe() == "no steps"

@@ -355,6 +355,13 @@ class DepthQuantization:
     def __repr__(self) -> str:
         return f"DepthQuantization(c0={self.c0:.6g}, c2={self.c2:.6g})"
 
+    def describe(self) -> str:
+        """The step in words: ``"depth codes of 0.05 scene units"`` (:meth:`codes`),
+        ``"codes of 0.0012 in 1/z"`` (disparity, z-buffer), both joined, or ``"no steps"``."""
+        parts = ([f"depth codes of {self.c2:g} scene units"] if self.c2 else []) + (
+            [f"codes of {self.c0:.4g} in 1/z"] if self.c0 else [])
+        return " and ".join(parts) or "no steps"
+
     # -------------------------------------------------------------- constructors
     @classmethod
     def disparity(cls, *, baseline: float, focal_px: float, step: float = 1.0) -> "DepthQuantization":
