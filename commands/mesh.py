@@ -18,7 +18,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("view", metavar="VIEW.json", help="view file with depth")
     lod = parser.add_mutually_exclusive_group()
     lod.add_argument("--threshold", type=positive_float, metavar="T",
-                     help="level of detail in 24-bit z' units (the seed's 2^15 = 32768, 2^11 = 2048)")
+                     help="level of detail in 24-bit z' units (the seed's 2^15 = 32768, 2^11 = 2048); default: "
+                          "the threshold --max-error's 0.5 px gives for the baseline, printed (e.g. 214606 for "
+                          "the bundled clutter view with --method paper), not the seed's 32768")
     lod.add_argument("--max-error", type=positive_float, metavar="PX", dest="max_error",
                      help="max reprojection error in pixels for a move of one baseline (default 0.5)")
     parser.add_argument("--baseline", type=positive_float, metavar="B",
@@ -33,7 +35,10 @@ def add_arguments(parser) -> None:
                              "the OBJ's texture; replaced as --obj's)")
     parser.add_argument("--frame", choices=("cam", "world"), default="cam",
                         help="vertex coordinates of the exports (default: source camera frame)")
-    parser.add_argument("--viz", metavar="SEG.png", help="write the segmentation drawn over the image")
+    parser.add_argument("--viz", metavar="SEG.png",
+                        help="write the segmentation drawn over the image (dimmed to 70%%): red one-pixel outlines "
+                             "(each quad's top row and left column), yellow one-pixel quads, black pixels without "
+                             "depth (no quad)")
     parser.add_argument("--viz-scale", type=number_in(1, 64, integer=True, what="a scale"), default=1, metavar="N",
                         help="upscale the segmentation picture N times (1..64, default 1)")
 

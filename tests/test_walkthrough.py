@@ -362,3 +362,39 @@ def test_depth_quantization_describes_itself():
     assert DepthQuantization.codes(0.05).describe() == "depth codes of 0.05 scene units"
     assert DepthQuantization.disparity(baseline=0.2, focal_px=500).describe() == "codes of 0.01 in 1/z"
     assert DepthQuantization().describe() == "no steps"
+
+
+# --------------------------------------------------------------------------- 11: mesh --threshold default, --viz
+def test_mesh_paper_default_threshold_is_the_one_help_and_docs_state(tmp_path, capsys):
+    assert cli.main(["mesh", str(DATA / "clutter_a.json"), "--method", "paper"]) == 0
+    printed = re.search(r"mesh: threshold (\d+) in z' units", capsys.readouterr().err).group(1)
+    assert printed != "32768"
+    assert cli.main(["mesh", "--help"]) == 0
+    help_text = " ".join(capsys.readouterr().out.split()).replace("- ", "-")
+    assert f"e.g. {printed} for the bundled clutter view with --method paper" in help_text
+    docs = (ROOT / "docs" / "mesh.md").read_text()
+    assert f"{printed} for the bundled clutter view" in " ".join(docs.split())
+
+
+def test_mesh_viz_colours_are_the_ones_the_help_names(tmp_path, capsys):
+    from ibr.io import read_image, write_depth
+    from ibr.mesh.quad_mesh import build_mesh
+    from ibr.io import load_view
+
+    view = _copy_view(DATA / "room_a.json", tmp_path, "a.json")
+    depth = load_view(view).depth.copy()
+    depth[100:110, 200:210] = np.nan       # no depth: black
+    depth[50, 50] = depth[50, 50] * 0.5    # a lone near pixel: a one-pixel quad, yellow
+    write_depth(tmp_path / "d.exr", depth)
+    doc = json.loads(view.read_text())
+    doc["depth"] = {"path": "d.exr", "encoding": "z"}
+    view.write_text(json.dumps(doc))
+    assert cli.main(["mesh", str(view), "--viz", str(tmp_path / "seg.png")]) == 0
+    seg = read_image(tmp_path / "seg.png")
+    mesh = build_mesh(load_view(view))
+    assert mesh.quad_of_pixel[105, 205] == -1 and tuple(seg[105, 205]) == (0, 0, 0)
+    assert mesh.areas[mesh.quad_of_pixel[50, 50]] == 1 and tuple(seg[50, 50]) == (255, 220, 0)
+    assert tuple(seg[0, 0]) == (255, 40, 40)                      # an outline
+    assert cli.main(["mesh", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "red one-pixel outlines" in text and "yellow one-pixel quads" in text and "black pixels without depth" in text
