@@ -53,6 +53,11 @@ def run(args) -> int:
     if args.topics == ["list"]:
         print("\n".join(available))
         return 0
+    if "list" in args.topics:  # 'ibr bench list mesh' said "expected one of ..., got 'list'"
+        others = [t for t in args.topics if t != "list"]
+        raise ValueError(f"topic: 'list' lists the benchmarks ({', '.join(available)}) and takes no other topic; "
+                         f"run 'ibr bench list', or 'ibr bench {' '.join(others)}' to run "
+                         f"{'it' if len(others) == 1 else 'them'}")
     for topic in args.topics:
         if topic not in available:
             raise ValueError(f"topic: expected one of {', '.join(map(repr, available))}, got {topic!r}")

@@ -380,6 +380,9 @@ _add("bench --out is a file", O, "error", r"--out: .* exists and is not a folder
 U = "cli"
 _add("interpolate --fps 0", U, "usage", r"argument --fps: expected a frame rate > 0",
      argv=("interpolate", "{d}/a.json", "{d}/b.json", "--frames", "24", "--video", "{d}/v.mp4", "--fps", "0"), issue=True)
+_add("bench list with a topic", C, "error", r"topic: 'list' lists the benchmarks \(.*mesh.*\) and takes no other topic; "
+     r"run 'ibr bench list', or 'ibr bench mesh' to run it", argv=("bench", "list", "mesh", "--out", "{d}/bench"),
+     extra={"absent": ("bench",)})
 _add("interpolate --fps without --video", C, "error", r"--fps: only used with --video", argv=("interpolate", "{d}/a.json",
      "{d}/b.json", "--fps", "30", "-o", "{d}/fr"), extra={"absent": ("fr",)})
 _add("interpolate --fps -1", U, "usage", r"argument --fps: expected a frame rate", argv=("interpolate", "--fps", "-1"))

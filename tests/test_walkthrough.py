@@ -398,3 +398,16 @@ def test_mesh_viz_colours_are_the_ones_the_help_names(tmp_path, capsys):
     assert cli.main(["mesh", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "red one-pixel outlines" in text and "yellow one-pixel quads" in text and "black pixels without depth" in text
+
+
+# --------------------------------------------------------------------------- 12: ibr bench list TOPIC
+def test_bench_list_with_a_topic_says_how_to_list_or_run(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["bench", "list", "mesh"]) == 1
+    err = capsys.readouterr().err
+    assert "ibr bench: error: topic: 'list' lists the benchmarks (" in err
+    assert "run 'ibr bench list', or 'ibr bench mesh' to run it" in err and "got 'list'" not in err
+    assert list(tmp_path.iterdir()) == []  # nothing run, no ./ibr-bench made
+    assert cli.main(["bench", "list"]) == 0
+    listed = capsys.readouterr().out.split()
+    assert "mesh" in listed and "render" in listed
