@@ -411,3 +411,16 @@ def test_bench_list_with_a_topic_says_how_to_list_or_run(tmp_path, capsys, monke
     assert cli.main(["bench", "list"]) == 0
     listed = capsys.readouterr().out.split()
     assert "mesh" in listed and "render" in listed
+
+
+# --------------------------------------------------------------------------- 13: docs/cli.md lists every command
+def test_cli_page_lists_every_command_with_a_docs_page():
+    text = (ROOT / "docs" / "cli.md").read_text()
+    rows = {m.group(1): m.group(2) for m in re.finditer(r"^\| `ibr ([a-z-]+)[^`]*` \|[^|\n]*(?:\\\|[^|\n]*)*\| (.*) \|$",
+                                                       text, re.M)}
+    assert sorted(rows) == sorted(name for name, _ in cli.COMMANDS)
+    for name, docs in rows.items():
+        links = re.findall(r"\]\(([a-z_]+\.md)(?:#[a-z-]+)?\)", docs)
+        assert links, name
+        assert all((ROOT / "docs" / link).is_file() for link in links), (name, links)
+    assert "#ibr-samples" in text and "### `ibr samples`" in (ROOT / "docs" / "synth.md").read_text()
