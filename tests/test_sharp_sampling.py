@@ -146,3 +146,20 @@ def test_interpolation_choices_are_checked():
     cam = Camera(100.0, 100.0, 15.5, 11.5, 32, 24)
     with pytest.raises(ValueError, match="interpolation"):
         interpolate(a, a, cam, interpolation="nearest")
+
+
+def test_upsample_rgbt_equals_the_upsampled_four_channel_image():
+    from ibr.render.composite import trust_channel
+    from ibr.render.sharp_sampling import upsample_rgbt
+
+    rng = np.random.default_rng(5)
+    color = rng.integers(0, 255, (11, 14, 3), dtype=np.uint8)
+    trust = rng.random((11, 14)).astype(np.float32)
+    z = np.full((11, 14), 3.0, np.float32)
+    z[:, 9:] = 1.5
+    edges = depth_edges(z)
+    t8 = trust_channel(trust, (11, 14))
+    assert t8.dtype == np.uint8 and np.array_equal(t8, np.rint(trust * 255).astype(np.uint8))
+    assert np.array_equal(upsample_rgbt(color, t8, edges), upsample_cosited(rgbt_source(color, trust), edges))
+    with pytest.raises(ValueError, match=r"trust: expected shape \(11, 15\), got \(11, 14\)"):
+        trust_channel(trust, (11, 15))

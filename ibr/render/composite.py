@@ -25,7 +25,7 @@ from ..base.camera import Camera
 from .rasterize import Layer, scratch
 
 __all__ = ["COMPOSITE_MODES", "Composite", "composite", "mixed_pixels", "pack_trust", "remap_composite", "rgbt_source",
-           "rim_beside_holes", "sample_composite", "source_trust", "viewpoint_weights"]
+           "rim_beside_holes", "sample_composite", "source_trust", "trust_channel", "viewpoint_weights"]
 
 #: Relative step in inverse depth between 4-neighbours that marks a depth discontinuity (and
 #: that is also ``STEP_RATIO`` times larger than the neighbouring differences on the line).
@@ -419,16 +419,19 @@ def rgbt_source(color, trust=None) -> np.ndarray:
         raise ValueError(f"color: expected (H, W, 3) uint8, got {c.dtype} {c.shape}")
     out = np.empty((*c.shape[:2], 4), np.uint8)
     out[..., :3] = c
-    if trust is None:
-        out[..., 3] = 255
-    else:
-        t = np.asarray(trust, np.float32)
-        if t.shape != c.shape[:2]:
-            raise ValueError(f"trust: expected shape {c.shape[:2]}, got {t.shape}")
-        scaled = np.clip(t, 0.0, 1.0)  # one temporary (peak memory at 1080p, #13)
-        scaled *= 255.0
-        out[..., 3] = np.rint(scaled, out=scaled)
+    out[..., 3] = 255 if trust is None else trust_channel(trust, c.shape[:2])
     return out
+
+
+def trust_channel(trust, shape) -> np.ndarray:
+    """(H, W) uint8: ``trust`` (in [0, 1], clipped) in steps of 1/255, rounded; ``shape`` (H, W)
+    is checked."""
+    t = np.asarray(trust, np.float32)
+    if t.shape != tuple(shape):
+        raise ValueError(f"trust: expected shape {tuple(shape)}, got {t.shape}")
+    scaled = np.clip(t, 0.0, 1.0)  # one temporary (peak memory at 1080p, #13)
+    scaled *= 255.0
+    return np.rint(scaled, out=scaled).astype(np.uint8)
 
 
 def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: float = 0.02, rims=None,

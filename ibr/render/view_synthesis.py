@@ -25,9 +25,10 @@ from ..base.validate import check_choice, check_finite_scalar, check_mesh_option
 from ..base.camera import Camera, interpolate_cameras
 from ..base.depth import quantization_of, set_quantization
 from .composite import (COMPOSITE_MODES, Composite, composite, mixed_pixels, pack_trust, remap_composite,
-                        rgbt_source, rim_beside_holes, sample_composite, source_trust, viewpoint_weights)
+                        rgbt_source, rim_beside_holes, sample_composite, source_trust, trust_channel,
+                        viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_previous_inplace, _fill_pullpush_inplace, parallax_axis
-from .sharp_sampling import SHARP_SCALE, depth_edges, upsample_cosited
+from .sharp_sampling import SHARP_SCALE, depth_edges, upsample_cosited, upsample_rgbt
 from .supersample import check_supersample, downsample_rendering, supersampled_camera
 from .rasterize import (CRACK_REL, FOOTPRINTS, Layer, _rasterize_many_into, as_float_color,
                         sample_maps, scratch, scratch_maps)
@@ -165,17 +166,21 @@ class _Source:
         without ``silhouettes``), upsampled ``scale`` x ``scale`` for sharp sampling
         (:func:`~ibr.render.sharp_sampling.upsample_cosited`; only that one is kept), and the
         background rim (None without ``silhouettes``), cached like :meth:`trust`."""
-        key = ("rgbt", mesh_key if silhouettes else "plain", scale)
+        key = ("rgbt", mesh_key if silhouettes or scale != 1 else "plain", silhouettes, scale)
         got = self._trust.get(key)
         if got is None:
-            if silhouettes:
-                depth, quant = self._source_depth(mesh_key), self._quantization(mesh_key)
-                got = (rgbt_source(self.raw, source_trust(depth, quantization=quant)),
-                       mixed_pixels(depth, side="far", quantization=quant))
-            else:
-                got = (rgbt_source(self.raw), None)
-            if scale != 1:
-                got = (upsample_cosited(got[0], self._edges(mesh_key)), got[1])
+            depth = self._source_depth(mesh_key) if silhouettes or scale != 1 else None
+            quant = self._quantization(mesh_key)
+            rims = mixed_pixels(depth, side="far", quantization=quant) if silhouettes else None
+            trust = trust_channel(source_trust(depth, quantization=quant), depth.shape) if silhouettes else 255
+            if scale == 1:
+                color = rgbt_source(self.raw)
+                color[..., 3] = trust
+            else:  # built at 2 x 2 directly, each frame-sized temporary freed when done (1080p peak memory)
+                edges = depth_edges(depth)
+                del depth
+                color = upsample_rgbt(self.raw, np.broadcast_to(np.uint8(trust), self.raw.shape[:2]), edges)
+            got = (color, rims)
             for x in got:
                 if x is not None:
                     x.setflags(write=False)
@@ -206,13 +211,9 @@ class _Source:
         key = ("sharp", mesh_key)
         c = self._trust.get(key)
         if c is None:
-            c = self._trust[key] = upsample_cosited(self.color, self._edges(mesh_key))
+            c = self._trust[key] = upsample_cosited(self.color, depth_edges(self._source_depth(mesh_key)))
             c.setflags(write=False)
         return c
-
-    def _edges(self, mesh_key) -> np.ndarray:
-        """:func:`~ibr.render.sharp_sampling.depth_edges` of the depth for ``mesh_key``."""
-        return depth_edges(self._source_depth(mesh_key))
 
 
 _sources: "weakref.WeakKeyDictionary[View, _Source]" = weakref.WeakKeyDictionary()
