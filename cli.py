@@ -70,6 +70,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("ibr: interrupted", file=sys.stderr)
         return 1
+    except BrokenPipeError:  # e.g. 'ibr bench list | head -3': the reader left; quietly, as a SIGPIPE exit
+        _silence_stdout()
+        return 128 + 13
     except (ValueError, TypeError, OSError, RuntimeError) as exc:
         print(f"ibr {args.command}: error: {exc}", file=sys.stderr)
         return 1
@@ -79,6 +82,18 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"ibr {args.command}: error: {opencv_message(exc)}", file=sys.stderr)
         return 1
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null, so that the interpreter's last flush of a closed pipe does not
+    print another error at exit (the recipe of Python's signal module documentation)."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no real stdout (a test's stand-in)
+        pass
 
 
 def opencv_message(exc: Exception) -> str:

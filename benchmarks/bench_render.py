@@ -269,11 +269,12 @@ def print_table(rows):
     print(head)
     print("-" * len(head))
     for r in rows:
-        def f(x, fmt):
-            return " " * len(format(0.0, fmt)) if not np.isfinite(x) else format(x, fmt)
+        def f(x, fmt):  # not measured for this row: a dash, so the columns stay readable
+            return format("-", ">" + fmt.split(".")[0]) if not np.isfinite(x) else format(x, fmt)
+        holes = f"{f(100 * r['holes'], '6.2f')}%" if np.isfinite(r["holes"]) else f(r["holes"], "7.2f")
         print(f"{r['scene']:<17} {r['method']:<34} {f(r['build_ms'], '8.1f')} {f(r['frame_ms'], '8.1f')} "
               f"{f(r['ratio'], '7.2f')} {f(r['psnr_cov'], '8.2f')} {f(r['psnr'], '8.2f')} {f(r['ssim'], '6.4f')} "
-              f"{f(100 * r['holes'], '6.2f')}%")
+              f"{holes}")
 
 
 def plot(rows, path):

@@ -424,3 +424,22 @@ def test_cli_page_lists_every_command_with_a_docs_page():
         assert links, name
         assert all((ROOT / "docs" / link).is_file() for link in links), (name, links)
     assert "#ibr-samples" in text and "### `ibr samples`" in (ROOT / "docs" / "synth.md").read_text()
+
+
+def test_a_reader_that_leaves_early_ends_the_command_quietly(monkeypatch, capsys):
+    """'ibr bench list | head -3' printed 'ibr bench: error: [Errno 32] Broken pipe': a closed
+    pipe on stdout now ends the command with the SIGPIPE status and no message."""
+    import sys
+
+    from cli import main
+
+    class ClosedPipe:
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            pass
+
+    monkeypatch.setattr(sys, "stdout", ClosedPipe())
+    assert main(["bench", "list"]) == 141
+    assert "error" not in capsys.readouterr().err
