@@ -59,8 +59,15 @@ def _half_way(image: np.ndarray, axis: int, edges: np.ndarray | None, dst: np.nd
         out = cv2.filter2D(image, -1, k, dst=dst, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
     # no overshoot: within the range of the two pixels it lies between (Lanczos' lobes made flat
     # areas beside texture change with the sub-pixel phase: a sequence's flicker 0.36 -> 0.56 levels)
-    nxt = np.concatenate([image[:, 1:], image[:, -1:]], 1) if axis == 1 else np.concatenate([image[1:], image[-1:]], 0)
-    np.clip(out, np.minimum(image, nxt), np.maximum(image, nxt), out=out)
+    n = image.shape[axis]
+    for r0 in range(0, image.shape[0], _ROWS):  # strips of rows: small temporaries
+        r1 = min(r0 + _ROWS, image.shape[0])
+        a = image[r0:r1]
+        if axis == 1:
+            b = np.concatenate([a[:, 1:], a[:, -1:]], 1)
+        else:  # the next row, the last one repeated
+            b = image[np.minimum(np.arange(r0 + 1, r1 + 1), n - 1)]
+        np.clip(out[r0:r1], np.minimum(a, b), np.maximum(a, b), out=out[r0:r1])
     if edges is not None and edges.any():
         taps = np.ones((1, 2 * _LANCZOS_A) if axis == 1 else (2 * _LANCZOS_A, 1), np.uint8)
         near = cv2.dilate(edges.view(np.uint8), taps, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
