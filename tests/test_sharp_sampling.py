@@ -11,7 +11,13 @@ from ibr.base.view import View
 from ibr.io import load_view
 from ibr.render.composite import remap_composite, rgbt_source
 from ibr.render.rasterize import SourceMaps
-from ibr.render.sharp_sampling import depth_edges, half_sample_kernel, upsample_cosited
+from ibr.base.depth import depth_steps
+from ibr.render.sharp_sampling import half_sample_kernel, upsample_cosited
+
+
+def depth_edges(z):  # what sharp sampling protects: steps of 2 % in 1/z, the edge of valid depth
+    with np.errstate(divide="ignore"):
+        return depth_steps(1.0 / z, 0.02)
 from samples import DATA_DIR
 
 
@@ -78,12 +84,17 @@ def test_no_tap_reaches_across_a_depth_edge():
     assert np.array_equal(aware[::2, ::2], img)
 
 
-def test_depth_edges_mark_steps_and_invalid_depth_not_a_slope():
+def test_depth_steps_mark_steps_and_the_edge_of_valid_depth_not_a_slope():
     z = np.tile(np.linspace(2.0, 2.3, 12, dtype=np.float32), (5, 1))  # a slope: 0.3 % per pixel
     assert not depth_edges(z).any()
     z[2, 5] = np.nan
     e = depth_edges(z)
     assert e[2, 5] and e[1, 5] and e[3, 5] and e[2, 4] and e[2, 6] and e.sum() == 5
+    z[2, 6] = 0.0  # two pixels without depth side by side are no step between them
+    e = depth_edges(z)
+    assert e[2, 4] and e[2, 7] and e.sum() == 8 and not depth_edges(np.full((3, 3), np.nan)).any()
+    inv = np.array([[1.0, 1.04, 1.2]])  # 4 % is a step at rel 0.02, not at 0.05
+    assert depth_steps(inv, 0.02).all() and depth_steps(inv, 0.05).tolist() == [[False, True, True]]
 
 
 @pytest.mark.parametrize("kwargs, match", [
@@ -177,3 +188,15 @@ def test_upsample_rgbt_equals_the_upsampled_four_channel_image():
     assert np.array_equal(upsample_rgbt(color, t8, edges), upsample_cosited(rgbt_source(color, trust), edges))
     with pytest.raises(ValueError, match=r"trust: expected shape \(11, 15\), got \(11, 14\)"):
         trust_channel(trust, (11, 15))
+
+
+@pytest.mark.parametrize("inv, rel, match", [
+    (np.ones(5), 0.02, "inv_depth: expected an"),
+    (np.ones((3, 3), bool), 0.02, "inv_depth: expected an"),
+    (np.ones((3, 3)), 0.0, "rel: expected a positive"),
+    (np.ones((3, 3)), float("nan"), "rel: expected a positive"),
+    (np.ones((3, 3)), "0.02", "rel: expected a positive"),
+])
+def test_depth_steps_refuses_bad_input(inv, rel, match):
+    with pytest.raises(ValueError, match=match):
+        depth_steps(inv, rel)

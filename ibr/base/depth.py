@@ -43,6 +43,7 @@ from .validate import check_array, check_finite_scalar, check_near_far as _near_
 __all__ = [
     "DepthQuantization",
     "code_step",
+    "depth_steps",
     "disparity_step",
     "quantization_of",
     "set_quantization",
@@ -77,6 +78,37 @@ def valid_mask(z) -> np.ndarray:
     z = np.asarray(z)
     with np.errstate(invalid="ignore"):
         return np.isfinite(z) & (z > 0)
+
+
+def depth_steps(inv_depth, rel: float) -> np.ndarray:
+    """(H, W) bool: both pixels of every pair of 4-neighbours across a depth discontinuity.
+
+    Parameters
+    ----------
+    inv_depth : (H, W) array
+        Inverse depth 1/z; NaN, infinite, 0 or negative where there is no depth.
+    rel : float
+        A step: the two inverse depths differ by more than ``rel`` times the larger (the
+        nearer surface's), or one pixel has depth and the other has none. Two pixels without
+        depth are no step.
+    """
+    q = np.asarray(inv_depth)
+    if q.ndim != 2 or q.dtype.kind not in "fiu":
+        raise ValueError(f"inv_depth: expected an (H, W) array of numbers, got {q.dtype} {q.shape}")
+    if not (isinstance(rel, (int, float, np.floating)) and np.isfinite(rel) and rel > 0):
+        raise ValueError(f"rel: expected a positive finite number, got {rel!r}")
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(q) & (q > 0)
+    out = np.zeros(q.shape, bool)
+    for axis in (0, 1):
+        head = (slice(None, -1), slice(None)) if axis == 0 else (slice(None), slice(None, -1))
+        tail = (slice(1, None), slice(None)) if axis == 0 else (slice(None), slice(1, None))
+        a, b, va, vb = q[head], q[tail], valid[head], valid[tail]
+        with np.errstate(invalid="ignore"):
+            step = (va != vb) | (va & vb & (np.abs(a - b) > rel * np.maximum(a, b)))
+        out[head] |= step
+        out[tail] |= step
+    return out
 
 
 def _depth32(z) -> np.ndarray:

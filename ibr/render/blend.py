@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 
 from ..base.camera import Camera
+from ..base.depth import depth_steps
 from ..base.ray_camera import SphericalCamera
 from ..base.validate import check_choice, check_positive
 from . import _blend_kernels as _k
@@ -55,18 +56,7 @@ def edge_confidence(mesh) -> np.ndarray:
     conf = _conf_cache.get(mesh)
     if conf is None:
         inv = _mesh_inv_depth(mesh)
-        edge = np.zeros(inv.shape, bool)
-        for axis in (0, 1):
-            a = inv[:-1] if axis == 0 else inv[:, :-1]
-            b = inv[1:] if axis == 0 else inv[:, 1:]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                jump = (np.abs(a - b) > EDGE_JUMP * np.maximum(a, b)) & ((a > 0) | (b > 0))
-            if axis == 0:
-                edge[:-1] |= jump
-                edge[1:] |= jump
-            else:
-                edge[:, :-1] |= jump
-                edge[:, 1:] |= jump
+        edge = depth_steps(inv, EDGE_JUMP)
         if edge.any():
             dist = cv2.distanceTransform((~edge).astype(np.uint8), cv2.DIST_L2, 3)
         else:

@@ -21,7 +21,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["SHARP_SCALE", "depth_edges", "half_sample_kernel", "upsample_cosited", "upsample_rgbt"]
+__all__ = ["SHARP_SCALE", "half_sample_kernel", "upsample_cosited", "upsample_rgbt"]
 
 #: The factor of the upsampled sources: map coordinates are multiplied by it (a power of two:
 #: the product, and its inverse back, are exact in float32).
@@ -91,7 +91,7 @@ def upsample_cosited(image: np.ndarray, edges: np.ndarray | None = None) -> np.n
     image : (H, W) or (H, W, C) array, C <= 4
         uint8, uint16 or float32 (8-bit and 16-bit results are rounded and saturated).
     edges : (H, W) bool, optional
-        Pixels beside a depth discontinuity (:func:`depth_edges`): no Lanczos tap reaches
+        Pixels beside a depth discontinuity (:func:`ibr.base.depth.depth_steps`): no Lanczos tap reaches
         across them.
 
     Returns
@@ -145,21 +145,3 @@ def upsample_rgbt(color: np.ndarray, trust: np.ndarray, edges: np.ndarray | None
     out[0::2, 0::2, 3] = trust
     _fill_half_way(out, edges)
     return out
-
-
-def depth_edges(depth: np.ndarray, rel: float = 0.02) -> np.ndarray:
-    """(H, W) bool: pixels whose 4-neighbour lies more than ``rel`` away in inverse depth
-    (relative to the nearer), or whose depth or a 4-neighbour's is invalid (NaN, <= 0)."""
-    q = 1.0 / np.where(np.asarray(depth, np.float32) > 0, depth, np.nan)
-    e = np.zeros(q.shape, bool)
-    for axis in (0, 1):
-        a = q[:-1] if axis == 0 else q[:, :-1]
-        b = q[1:] if axis == 0 else q[:, 1:]
-        step = ~(np.abs(a - b) <= rel * np.maximum(a, b))  # NaN: a step
-        if axis == 0:
-            e[:-1] |= step
-            e[1:] |= step
-        else:
-            e[:, :-1] |= step
-            e[:, 1:] |= step
-    return e

@@ -23,12 +23,12 @@ import numpy as np
 
 from ..base.validate import check_choice, check_finite_scalar, check_mesh_options, check_positive
 from ..base.camera import Camera, interpolate_cameras
-from ..base.depth import quantization_of, set_quantization
+from ..base.depth import depth_steps, quantization_of, set_quantization
 from .composite import (COMPOSITE_MODES, Composite, composite, mixed_pixels, pack_trust, remap_composite,
                         rgbt_source, rim_beside_holes, sample_composite, source_trust, trust_channel,
                         viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_previous_inplace, _fill_pullpush_inplace, parallax_axis
-from .sharp_sampling import SHARP_SCALE, depth_edges, upsample_cosited, upsample_rgbt
+from .sharp_sampling import SHARP_SCALE, upsample_cosited, upsample_rgbt
 from .supersample import check_supersample, downsample_rendering, supersampled_camera
 from .rasterize import (CRACK_REL, FOOTPRINTS, Layer, _rasterize_many_into, as_float_color,
                         sample_maps, scratch, scratch_maps)
@@ -177,7 +177,7 @@ class _Source:
                 color = rgbt_source(self.raw)
                 color[..., 3] = trust
             else:  # built at 2 x 2 directly, each frame-sized temporary freed when done (1080p peak memory)
-                edges = depth_edges(depth)
+                edges = _sharp_edges(depth)
                 del depth
                 color = upsample_rgbt(self.raw, np.broadcast_to(np.uint8(trust), self.raw.shape[:2]), edges)
             got = (color, rims)
@@ -211,12 +211,20 @@ class _Source:
         key = ("sharp", mesh_key)
         c = self._trust.get(key)
         if c is None:
-            c = self._trust[key] = upsample_cosited(self.color, depth_edges(self._source_depth(mesh_key)))
+            c = self._trust[key] = upsample_cosited(self.color, _sharp_edges(self._source_depth(mesh_key)))
             c.setflags(write=False)
         return c
 
 
 _sources: "weakref.WeakKeyDictionary[View, _Source]" = weakref.WeakKeyDictionary()
+
+
+def _sharp_edges(depth) -> np.ndarray:
+    """The pixels of a source no Lanczos tap of sharp sampling reaches across: both sides of
+    every step of more than 2 % in 1/z, and the edge of valid depth
+    (:func:`~ibr.base.depth.depth_steps`)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return depth_steps(1.0 / np.asarray(depth, np.float32), 0.02)
 
 
 def _source(view: View) -> _Source:
