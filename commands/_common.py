@@ -85,9 +85,10 @@ def check_source_depth(what: str, path, view, purpose: str = "so it cannot be a 
     is left to the command's own check."""
     import numpy as np
 
+    from ibr.base.view import no_valid_depth_message
+
     if view.depth is not None and not np.isfinite(view.depth).any():
-        raise ValueError(f"{what}: {path}: the depth has no valid pixel (NaN, zero, negative or infinite "
-                         f"everywhere), {purpose}")
+        raise ValueError(no_valid_depth_message(f"{what}: {path}", f", {purpose}"))
 
 
 def progress(items: Iterable[T], total: int, label: str) -> Iterator[T]:

@@ -443,3 +443,22 @@ def test_a_reader_that_leaves_early_ends_the_command_quietly(monkeypatch, capsys
     monkeypatch.setattr(sys, "stdout", ClosedPipe())
     assert main(["bench", "list"]) == 141
     assert "error" not in capsys.readouterr().err
+
+
+def test_one_wording_for_a_depth_without_a_valid_pixel(tmp_path):
+    """The library (warp, stereo) and the CLI say the same sentence, each naming the view its way."""
+    from ibr.base.camera import Camera
+    from ibr.base.view import View, no_valid_depth_message
+    from ibr.stereo.pair import stereo_pair
+    from ibr.render.view_synthesis import warp
+
+    cam = Camera(20.0, 20.0, 3.5, 2.5, 8, 6)
+    view = View(np.zeros((6, 8, 3), np.uint8), np.full((6, 8), np.nan, np.float32), cam, "empty")
+    core = "the depth has no valid pixel (NaN, zero, negative or infinite everywhere)"
+    assert no_valid_depth_message("VIEW: a.json", ", so it has no mesh") == f"VIEW: a.json: {core}, so it has no mesh"
+    with pytest.raises(ValueError) as lib:
+        warp(view, cam)
+    with pytest.raises(ValueError) as pair:
+        stereo_pair(view, e=0.06, f=2.0)
+    assert f"view 'empty': {core}, so it cannot be a source" in str(lib.value)
+    assert str(pair.value) == f"view 'empty': {core}; a stereo pair needs depth"

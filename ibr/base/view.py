@@ -9,7 +9,7 @@ import numpy as np
 from .validate import check_color, check_image
 from .camera import Camera
 
-__all__ = ["DEPTH_RANGE", "View"]
+__all__ = ["DEPTH_RANGE", "View", "no_valid_depth_message"]
 
 #: Valid planar depths lie in this range (scene units). Values outside it are refused rather than
 #: rendered into nonsense (1e-30 everywhere puts every point on the camera centre; 1e30 makes
@@ -103,3 +103,10 @@ class View:
         if self.depth is None:
             raise ValueError(f"view {self.name!r}: {what} needs depth, but the view has none")
         return self.depth
+
+
+def no_valid_depth_message(who: str, consequence: str) -> str:
+    """The one wording of the error for a depth with no valid pixel, naming the view as ``who``
+    (the library: ``"view: view 'room_a'"``; the CLI: the option and the file the user gave) and
+    ending with ``consequence`` (its punctuation included, e.g. ``", so it cannot be a source"``)."""
+    return f"{who}: the depth has no valid pixel (NaN, zero, negative or infinite everywhere){consequence}"

@@ -32,7 +32,7 @@ from .sharp_sampling import SHARP_SCALE, upsample_cosited, upsample_rgbt
 from .supersample import check_supersample, downsample_rendering, supersampled_camera
 from .rasterize import (CRACK_REL, FOOTPRINTS, Layer, _rasterize_many_into, as_float_color,
                         sample_maps, scratch, scratch_maps)
-from ..base.view import View
+from ..base.view import View, no_valid_depth_message
 
 __all__ = [
     "INTERPOLATIONS",
@@ -319,8 +319,7 @@ def _check_source(view, name: str, method: str = "mesh") -> None:
     if src.any_valid is None:  # once per view
         src.any_valid = bool(np.isfinite(view.depth).any())
     if not src.any_valid:
-        raise ValueError(f"{name}: view {view.name!r}: the depth has no valid pixel (NaN, zero, negative or infinite "
-                         "everywhere), so it cannot be a source")
+        raise ValueError(no_valid_depth_message(f"{name}: view {view.name!r}", ", so it cannot be a source"))
 
 
 #: Map coordinates of the pixels a source does not cover, in the scratch maps of view synthesis:

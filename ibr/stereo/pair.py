@@ -40,7 +40,7 @@ from ..render.fill import _fill_horizontal_parallax_inplace
 from ..base.validate import (check_array, check_choice, check_color, check_finite_scalar, check_image,
                              check_mesh_options, check_positive)
 from ..base.camera import Camera, camera_from_gl_projection
-from ..base.view import View
+from ..base.view import View, no_valid_depth_message as _no_valid_depth
 from ..render.supersample import check_supersample, downsample_rendering, supersampled_camera
 
 __all__ = [
@@ -226,8 +226,7 @@ def _render_eye(view: View, eye_cam: Camera, method: str, max_jump_px: float, me
 def no_valid_depth_message(view: View, who: str | None = None) -> str:
     """The error for a view whose depth has no valid pixel (library and CLI say the same), naming
     the view as ``who`` (the CLI: ``"VIEW: path/to/view.json"``), else by its name."""
-    who = who or f"view {view.name!r}"
-    return f"{who}: the depth has no valid pixel (NaN, zero, negative or infinite everywhere); a stereo pair needs depth"
+    return _no_valid_depth(who or f"view {view.name!r}", "; a stereo pair needs depth")
 
 
 def check_stereo_supersample(supersample, method: str) -> int:
