@@ -404,15 +404,13 @@ def _chunk_rows(width: int) -> int:
     return max(16, CHUNK_PIXELS // max(int(width), 1))
 
 
-def _remap_rows(src, m, r0: int, r1: int, dst, scale: int) -> None:
+def _remap_rows(src, m, r0: int, r1: int, dst, scale: int, work) -> None:
     """``cv2.remap`` of rows ``r0 .. r1-1`` of maps ``m`` from ``src`` into ``dst``; with
     ``scale`` 2 the source is upsampled 2 x 2 and the rows' map coordinates are doubled into
-    per-thread work arrays (exact in float32)."""
+    ``work`` (two per-thread (rows, W) float32 arrays; exact in float32)."""
     mu, mv = m.map_u[r0:r1], m.map_v[r0:r1]
     if scale != 1:
-        rows = _chunk_rows(mu.shape[1])
-        su = scratch("map-u-chunk", (rows, mu.shape[1]), np.float32)[:r1 - r0]
-        sv = scratch("map-v-chunk", (rows, mu.shape[1]), np.float32)[:r1 - r0]
+        su, sv = work[0][:r1 - r0], work[1][:r1 - r0]
         mu, mv = np.multiply(mu, np.float32(scale), out=su), np.multiply(mv, np.float32(scale), out=sv)
     cv2.remap(src, mu, mv, cv2.INTER_LINEAR, dst=dst, borderMode=cv2.BORDER_REPLICATE)
 
@@ -503,10 +501,11 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
 
     def band(v0, v1):  # sample chunks of this band's rows, each composited while still in cache
         chunks = [scratch(("rgbt-chunk", i), (rows, wd, 4), np.uint8) for i in range(len(sources))]
+        work = [scratch(("map-chunk", axis), (rows, wd), np.float32) for axis in "uv"] if source_scale != 1 else None
         for r0 in range(v0, v1, rows):
             r1 = min(r0 + rows, v1)
             for src, m, dst in zip(sources, maps, chunks):
-                _remap_rows(src, m, r0, r1, dst[:r1 - r0], source_scale)
+                _remap_rows(src, m, r0, r1, dst[:r1 - r0], source_scale, work)
             _k.composite_rgbt(r0, r1, chunks[a], ma.depth, chunks[b], mb.depth, single, wa, wb, mode == "blend",
                               depth_tol, quant0, quant2, out, depth, coverage, use_trust, ra, ma.map_u, ma.map_v, rb,
                               mb.map_u, mb.map_v, rim, r0)
