@@ -200,3 +200,23 @@ def test_upsample_rgbt_equals_the_upsampled_four_channel_image():
 def test_depth_steps_refuses_bad_input(inv, rel, match):
     with pytest.raises(ValueError, match=match):
         depth_steps(inv, rel)
+
+
+@pytest.mark.parametrize("args, match", [
+    ((np.zeros((4, 5, 3), np.float32), np.zeros((4, 5), np.uint8)), "color: expected"),
+    ((np.zeros((4, 5, 4), np.uint8), np.zeros((4, 5), np.uint8)), "color: expected"),
+    ((np.zeros((4, 5, 3), np.uint8), np.zeros((4, 6), np.uint8)), "trust: expected"),
+    ((np.zeros((4, 5, 3), np.uint8), np.zeros((4, 5), np.float32)), "trust: expected"),
+    ((np.zeros((4, 5, 3), np.uint8), np.zeros((4, 5), np.uint8), np.zeros((5, 5), bool)), "edges: expected"),
+])
+def test_upsample_rgbt_refuses_bad_input(args, match):
+    from ibr.render.sharp_sampling import upsample_rgbt
+
+    with pytest.raises(ValueError, match=match):
+        upsample_rgbt(*args)
+
+
+@pytest.mark.parametrize("a", [0, -2, 2.5, True])
+def test_half_sample_kernel_refuses_bad_lobes(a):
+    with pytest.raises(ValueError, match="a: expected a positive integer"):
+        half_sample_kernel(a)

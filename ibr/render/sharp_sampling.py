@@ -37,6 +37,8 @@ _ROWS = 64
 def half_sample_kernel(a: int = _LANCZOS_A) -> np.ndarray:
     """(2a,) float32: Lanczos-a weights of the samples at offsets -a+1 .. a from a position
     half-way between sample 0 and sample 1 (normalized to sum 1)."""
+    if isinstance(a, bool) or not isinstance(a, (int, np.integer)) or a < 1:
+        raise ValueError(f"a: expected a positive integer (Lanczos lobes), got {a!r}")
     x = np.arange(-a + 1, a + 1) - 0.5
     k = np.sinc(x) * np.sinc(x / a)
     return (k / k.sum()).astype(np.float32)
@@ -139,7 +141,14 @@ def upsample_rgbt(color: np.ndarray, trust: np.ndarray, edges: np.ndarray | None
     """:func:`upsample_cosited` of the (H, W, 4) uint8 image that is ``color`` (H, W, 3) uint8
     with ``trust`` (H, W) uint8 as its fourth channel, built without that image (one frame-sized
     temporary less: peak memory of a 1920 x 1080 interpolation)."""
+    color, trust = np.asarray(color), np.asarray(trust)
+    if color.ndim != 3 or color.shape[2] != 3 or color.dtype != np.uint8 or min(color.shape[:2]) < 1:
+        raise ValueError(f"color: expected (H, W, 3) uint8, got {color.dtype} {color.shape}")
     h, w = color.shape[:2]
+    if trust.shape != (h, w) or trust.dtype != np.uint8:
+        raise ValueError(f"trust: expected ({h}, {w}) uint8, got {trust.dtype} {trust.shape}")
+    if edges is not None and np.shape(edges) != (h, w):
+        raise ValueError(f"edges: expected shape {(h, w)}, got {np.shape(edges)}")
     out = np.empty((2 * h, 2 * w, 4), np.uint8)
     out[0::2, 0::2, :3] = color
     out[0::2, 0::2, 3] = trust
