@@ -406,7 +406,8 @@ def run_stereo(args) -> int:
         changes, shares, prev = [], [], None
         try:
             for i, pair in enumerate(stereo_sequence(iter_views(seq), e=e, f=f, source=args.source,
-                                                     method=args.method, supersample=args.supersample)):
+                                                     method=args.method, supersample=args.supersample,
+                                                     interpolation=args.interpolation)):
                 left, right = _display(pair.left), _display(pair.right)
                 packed = pack_stereo(left, right, args.mode)
                 name = f"stereo_{i:0{number_width(len(seq))}d}"

@@ -21,7 +21,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["SHARP_SCALE", "half_sample_kernel", "upsample_cosited", "upsample_rgbt"]
+__all__ = ["SHARP_SCALE", "half_sample_kernel", "half_way_columns", "upsample_cosited", "upsample_rgbt"]
 
 #: The factor of the upsampled sources: map coordinates are multiplied by it (a power of two:
 #: the product, and its inverse back, are exact in float32).
@@ -47,18 +47,25 @@ def half_sample_kernel(a: int = _LANCZOS_A) -> np.ndarray:
 _KERNEL = half_sample_kernel()
 
 
+def _lanczos_half_way(image: np.ndarray, axis: int, dst: np.ndarray | None = None) -> np.ndarray:
+    """The Lanczos-3 samples half-way between each pixel and the next along ``axis`` (0 rows, 1
+    columns), unclamped; past the last pixel the border pixel repeats. Same dtype (rounded and
+    saturated)."""
+    k = _KERNEL.reshape(1, -1) if axis == 1 else _KERNEL.reshape(-1, 1)
+    anchor = (_LANCZOS_A - 1, 0) if axis == 1 else (0, _LANCZOS_A - 1)  # taps at -a+1 .. a
+    if dst is None:
+        return cv2.filter2D(image, -1, k, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
+    return cv2.filter2D(image, -1, k, dst=dst, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
+
+
 def _half_way(image: np.ndarray, axis: int, edges: np.ndarray | None, dst: np.ndarray | None = None) -> np.ndarray:
     """Samples half-way between each pixel and the next along ``axis`` (0 rows, 1 columns);
     past the last pixel the border pixel repeats. Same dtype (rounded and saturated). Each is
     clamped to the range of its two pixels, and where one of the six Lanczos taps lies on
     ``edges`` (a depth discontinuity) it is the plain mean of the two instead (bilinear: nothing
     is carried across a silhouette)."""
-    k = _KERNEL.reshape(1, -1) if axis == 1 else _KERNEL.reshape(-1, 1)
+    out = _lanczos_half_way(image, axis, dst)
     anchor = (_LANCZOS_A - 1, 0) if axis == 1 else (0, _LANCZOS_A - 1)  # taps at -a+1 .. a
-    if dst is None:
-        out = cv2.filter2D(image, -1, k, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
-    else:
-        out = cv2.filter2D(image, -1, k, dst=dst, anchor=anchor, borderType=cv2.BORDER_REPLICATE)
     # no overshoot: within the range of the two pixels it lies between (Lanczos' lobes made flat
     # areas beside texture change with the sub-pixel phase: a sequence's flicker 0.36 -> 0.56 levels)
     n = image.shape[axis]
@@ -83,6 +90,50 @@ def _half_way(image: np.ndarray, axis: int, edges: np.ndarray | None, dst: np.nd
     return out
 
 
+def half_way_columns(image: np.ndarray, edges: np.ndarray | None = None, *, clamp: bool = True) -> np.ndarray:
+    """The samples half-way between each pixel and the next one on its row: the odd columns of
+    :func:`upsample_cosited` on the source's rows, for warps that keep rows (a stereo eye,
+    :func:`ibr.stereo.map_pixels`), which need no other half-way sample.
+
+    Parameters
+    ----------
+    image : (H, W) or (H, W, C) array, C <= 4
+        uint8, uint16 or float32.
+    edges : (H, W) bool, optional
+        Pixels beside a depth discontinuity: no Lanczos tap reaches across them (the plain mean
+        of the two pixels there).
+    clamp : bool
+        Clamp each sample to the range of its two pixels (as :func:`upsample_cosited` does).
+        ``False`` (and no ``edges``) gives the plain Lanczos-3 samples, for a caller that clamps
+        and checks depth steps itself (method 2's row kernel does, 4x faster than here).
+
+    Returns
+    -------
+    Array of ``image``'s shape and dtype: element (y, x) lies at x + 0.5 (pixel centres at
+    integers; the last column repeats the border pixel).
+    """
+    img = _check_image(image, edges)
+    if not clamp and edges is not None:
+        raise ValueError("edges: only with clamp=True (unclamped samples are the plain Lanczos ones)")
+    if img.ndim == 3 and img.shape[2] == 1:  # OpenCV's filters return one channel as (H, W)
+        return half_way_columns(img[..., 0], edges, clamp=clamp)[..., None]
+    img = np.ascontiguousarray(img)
+    if not clamp:
+        return _lanczos_half_way(img, 1)
+    return _half_way(img, 1, None if edges is None else np.ascontiguousarray(edges, dtype=bool))
+
+
+def _check_image(image, edges) -> np.ndarray:
+    img = np.asarray(image)
+    if img.ndim not in (2, 3) or (img.ndim == 3 and not 1 <= img.shape[2] <= 4) or min(img.shape[:2]) < 1:
+        raise ValueError(f"image: expected (H, W) or (H, W, C <= 4), got shape {img.shape}")
+    if img.dtype not in (np.uint8, np.uint16, np.float32):
+        raise ValueError(f"image: expected uint8, uint16 or float32, got {img.dtype}")
+    if edges is not None and np.shape(edges) != img.shape[:2]:
+        raise ValueError(f"edges: expected shape {img.shape[:2]}, got {np.shape(edges)}")
+    return img
+
+
 def upsample_cosited(image: np.ndarray, edges: np.ndarray | None = None) -> np.ndarray:
     """``image`` upsampled 2 x 2, co-sited: output pixel (2y, 2x) is input pixel (y, x)
     exactly; the others are Lanczos-3 half-way samples clamped to the range of their two pixels
@@ -101,15 +152,8 @@ def upsample_cosited(image: np.ndarray, edges: np.ndarray | None = None) -> np.n
     (2H, 2W[, C]) array of the same dtype. A map coordinate x of ``image`` (pixel centres at
     integers) is 2x in the result.
     """
-    img = np.asarray(image)
-    if img.ndim not in (2, 3) or (img.ndim == 3 and not 1 <= img.shape[2] <= 4) or min(img.shape[:2]) < 1:
-        raise ValueError(f"image: expected (H, W) or (H, W, C <= 4), got shape {img.shape}")
-    if img.dtype not in (np.uint8, np.uint16, np.float32):
-        raise ValueError(f"image: expected uint8, uint16 or float32, got {img.dtype}")
-    if edges is not None:
-        edges = np.ascontiguousarray(edges, dtype=bool)
-        if edges.shape != img.shape[:2]:
-            raise ValueError(f"edges: expected shape {img.shape[:2]}, got {edges.shape}")
+    img = _check_image(image, edges)
+    edges = None if edges is None else np.ascontiguousarray(edges, dtype=bool)
     if img.ndim == 3 and img.shape[2] == 1:  # OpenCV's filters return one channel as (H, W)
         return upsample_cosited(img[..., 0], edges)[..., None]
     h, w = img.shape[:2]

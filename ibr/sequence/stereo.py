@@ -14,7 +14,7 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from ..base.view import View
-from ..stereo.pair import StereoPair, check_stereo_supersample, stereo_pair
+from ..stereo.pair import StereoPair, check_stereo_interpolation, check_stereo_supersample, stereo_pair
 from ..stereo.stereo_camera import DEFAULT_MAX_ANGLE_DEG, auto_stereo
 
 __all__ = ["pool_depths", "sequence_stereo_params", "stereo_sequence"]
@@ -41,18 +41,19 @@ def sequence_stereo_params(depths: Iterable, *, max_angle_deg: float = DEFAULT_M
 
 def stereo_sequence(views: Iterable[View], *, e: float, f: float, source: str = "center",
                     method: str = "pixel", mesh_options: dict | None = None,
-                    supersample: int = 1) -> Iterator[StereoPair]:
+                    supersample: int = 1, interpolation: str = "linear") -> Iterator[StereoPair]:
     """Yield :func:`ibr.stereo.stereo_pair` of every view with the same ``e``, ``f`` and options
-    (``supersample``: with ``method="mesh"``, see there).
+    (``supersample``: with ``method="mesh"``; ``interpolation``: with ``method="pixel"``; see there).
 
     ``views`` is consumed lazily (one view alive at a time). Disocclusions are filled per row
     from the background side and smoothed across rows, as for single frames; the pair's ``left_holes``/``right_holes``
     report them.
     """
     check_stereo_supersample(supersample, method)  # at the first frame asked for, before any view is read
+    check_stereo_interpolation(interpolation, method)
     for view in views:
         yield stereo_pair(view, e=e, f=f, source=source, method=method, mesh_options=mesh_options,
-                          supersample=supersample)
+                          supersample=supersample, interpolation=interpolation)
 
 
 def pool_depths(depths: Iterable, *, stride: int = 4) -> np.ndarray:
