@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from ibr import synth
 from ibr.render._fill_kernels import fill_rows_background, fill_rows_background_reference
+from ibr.stereo import pair as _pair_module
 from ibr.stereo._pair_kernels import scanline_warp, scanline_warp_reference
 from ibr.base.camera import Camera, gl_frustum_from_projection, look_at
 from ibr.base.depth import window_from_z
@@ -253,10 +254,12 @@ def test_scanline_kernel_matches_reference():
         np.testing.assert_allclose(c[cov], ref_c[cov], atol=1e-5)
 
 
-@pytest.mark.parametrize("nc, dtype", [(1, np.float32), (3, np.uint8), (4, np.uint16)])
-def test_scanline_kernel_matches_reference_for_each_channel_count(nc, dtype):
+@pytest.mark.parametrize("sharp", [False, True])
+@pytest.mark.parametrize("nc, dtype", [(1, np.float32), (3, np.uint8), (3, np.float32), (4, np.uint16)])
+def test_scanline_kernel_matches_reference_for_each_channel_count(nc, dtype, sharp):
     # three channels take the written-out path, others the loop over channels; integer colours
-    # are rounded half up from the float interpolation
+    # are rounded half up from the float interpolation; ``sharp``: each segment through the
+    # resolved half-way sample of its two pixels (interpolation="sharp")
     rng = np.random.default_rng(nc)
     h, w = 5, 60
     z = rng.uniform(1.0, 3.0, (h, w)).astype(np.float32)
@@ -264,16 +267,21 @@ def test_scanline_kernel_matches_reference_for_each_channel_count(nc, dtype):
     z[1, 40] = np.nan
     hi = 1.0 if dtype == np.float32 else np.iinfo(dtype).max
     color = (rng.uniform(0, 1, (h, w, nc)) * hi).astype(dtype)
-    ref_c, ref_z, ref_cov = scanline_warp_reference(color.astype(np.float64), z, 60.0, 0.03, -0.8, 1.0)
-    c = np.zeros((h, w, nc), dtype)
-    d = np.zeros((h, w), np.float32)
-    cov = np.zeros((h, w), bool)
-    scanline_warp(0, h, color, z, 60.0, 0.03, -0.8, 1.0, c, d, cov, dtype != np.float32)
-    np.testing.assert_array_equal(cov, ref_cov)
-    assert 0 < cov.mean() < 1
-    np.testing.assert_allclose(d[cov], ref_z[cov], rtol=1e-5)
-    expect = ref_c[cov] if dtype == np.float32 else np.floor(ref_c[cov] + 0.5)
-    np.testing.assert_allclose(c[cov].astype(np.float64), expect, atol=1e-5 * hi if dtype == np.float32 else 1)
+    half = _pair_module._half_way_table(color, z) if sharp else None
+    for dx, dp in ((0.03, -0.8), (-0.02, 1.3)):
+        ref_c, ref_z, ref_cov = scanline_warp_reference(color.astype(np.float64), z, 60.0, dx, dp, 1.0, half=half)
+        c = np.zeros((h, w, nc), dtype)
+        d = np.zeros((h, w), np.float32)
+        cov = np.zeros((h, w), bool)
+        scanline_warp(0, h, color, z, 60.0, dx, dp, 1.0, c, d, cov, dtype != np.float32, half)
+        np.testing.assert_array_equal(cov, ref_cov)
+        assert 0 < cov.mean() < 1
+        np.testing.assert_allclose(d[cov], ref_z[cov], rtol=1e-5)
+        expect = ref_c[cov] if dtype == np.float32 else np.floor(ref_c[cov] + 0.5)
+        np.testing.assert_allclose(c[cov].astype(np.float64), expect, atol=1e-5 * hi if dtype == np.float32 else 1)
+        if sharp:  # not the linear interpolation
+            lin_c, _, _ = scanline_warp_reference(color.astype(np.float64), z, 60.0, dx, dp, 1.0)
+            assert np.abs(ref_c[cov] - lin_c[cov]).max() > 0.01 * hi
 
 
 def test_fill_background_matches_reference_and_takes_far_side():

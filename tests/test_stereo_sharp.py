@@ -1,6 +1,6 @@
 """Sharp sampling for stereo method 2 (``interpolation="sharp"``): the row kernel runs each
 segment's colour through the Lanczos-3 half-way sample of its two pixels (issue 11's sharp
-sampling, along rows only)."""
+sampling, along rows only). The kernel against its reference: tests/test_stereo.py."""
 
 from __future__ import annotations
 
@@ -9,19 +9,11 @@ import pytest
 
 import cli
 from ibr import synth
-from ibr.base.depth import depth_steps
 from ibr.render.sharp_sampling import half_way_columns, upsample_cosited
-from ibr.stereo._pair_kernels import resolve_half_way, scanline_warp, scanline_warp_reference
-from ibr.stereo.pair import map_pixels, stereo_pair
+from ibr.stereo.pair import _half_way_table, map_pixels, stereo_pair
 from ibr.stereo.stereo_camera import auto_stereo
 from ibr.sequence.stereo import stereo_sequence
 from samples import DATA_DIR
-
-
-def _resolved(color, z):
-    half = np.ascontiguousarray(half_way_columns(color, clamp=False))
-    resolve_half_way(0, color.shape[0], color, z, half, color.dtype.kind in "ui")
-    return half
 
 
 def _row_steps_reference(z):
@@ -48,7 +40,7 @@ def test_resolved_half_way_samples_are_clamped_lanczos_or_the_mean_beside_steps(
     z = np.full((h, w), 2.0, np.float32) + rng.uniform(0, 0.01, (h, w)).astype(np.float32)
     z[:, 20:26] = 1.0  # a bar in front
     z[3, 40] = np.nan
-    half = _resolved(color, z)
+    half = _half_way_table(color, z)
     clean = upsample_cosited(color)[0::2, 1::2]  # no edges: plain clamped Lanczos
     steps = _row_steps_reference(z)
     across = np.zeros((h, w), bool)
@@ -61,30 +53,6 @@ def test_resolved_half_way_samples_are_clamped_lanczos_or_the_mean_beside_steps(
     np.testing.assert_allclose(got[across[:, :-1]], mean[across[:, :-1]], atol=1e-6 * hi)
     assert across.sum() > 10 and (~across).sum() > 100
     np.testing.assert_array_equal(half[:, -1], color[:, -1])  # past the border: the pixel itself
-
-
-@pytest.mark.parametrize("nc, dtype", [(3, np.float32), (3, np.uint8), (1, np.float32), (4, np.uint16)])
-def test_sharp_row_kernel_matches_its_reference(nc, dtype):
-    rng = np.random.default_rng(10 + nc)
-    h, w = 5, 60
-    z = rng.uniform(1.0, 3.0, (h, w)).astype(np.float32)
-    z[:, 20:27] = 0.5
-    z[1, 40] = np.nan
-    hi = 1.0 if dtype == np.float32 else np.iinfo(dtype).max
-    color = (rng.uniform(0, 1, (h, w, nc)) * hi).astype(dtype)
-    half = _resolved(color, z)
-    for dx, dp in ((0.03, -0.8), (-0.02, 1.3)):
-        ref_c, ref_z, ref_cov = scanline_warp_reference(color.astype(np.float64), z, 60.0, dx, dp, 1.0, half=half)
-        lin_c, _, _ = scanline_warp_reference(color.astype(np.float64), z, 60.0, dx, dp, 1.0)
-        c = np.zeros((h, w, nc), dtype)
-        d = np.zeros((h, w), np.float32)
-        cov = np.zeros((h, w), bool)
-        scanline_warp(0, h, color, z, 60.0, dx, dp, 1.0, c, d, cov, dtype != np.float32, half)
-        np.testing.assert_array_equal(cov, ref_cov)
-        np.testing.assert_allclose(d[cov], ref_z[cov], rtol=1e-5)
-        expect = ref_c[cov] if dtype == np.float32 else np.floor(ref_c[cov] + 0.5)
-        np.testing.assert_allclose(c[cov].astype(np.float64), expect, atol=1e-5 * hi if dtype == np.float32 else 1)
-        assert np.abs(ref_c[cov] - lin_c[cov]).max() > 0.01 * hi  # sharp is not linear
 
 
 def test_a_whole_pixel_shift_is_exact_with_sharp_sampling():
