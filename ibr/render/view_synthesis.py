@@ -28,6 +28,7 @@ from .composite import (COMPOSITE_MODES, Composite, composite, mixed_pixels, pac
                         rgbt_source, rim_beside_holes, sample_composite, source_trust, trust_channel,
                         viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_previous_inplace, _fill_pullpush_inplace, parallax_axis
+from .matting import rematte_rims, rim_matte
 from .sharp_sampling import SHARP_SCALE, upsample_cosited, upsample_rgbt
 from .supersample import check_supersample, downsample_rendering, supersampled_camera
 from .rasterize import (CRACK_REL, FOOTPRINTS, Layer, _rasterize_many_into, as_float_color,
@@ -187,6 +188,16 @@ class _Source:
             self._trust[key] = got
         return got
 
+    def rim_matte(self, mesh_key):
+        """:func:`~ibr.render.matting.rim_matte` of the source, from the depth of its mesh for
+        ``mesh_key`` (cached like :meth:`trust`)."""
+        key = ("matte", mesh_key)
+        m = self._trust.get(key)
+        if m is None:
+            m = self._trust[key] = rim_matte(self.raw, self._source_depth(mesh_key), self._view().camera,
+                                             quantization=self._quantization(mesh_key))
+        return m
+
     def _source_depth(self, mesh_key):
         """The depth of the mesh for ``mesh_key`` (planes: quantized depth codes are no steps) or,
         for ``None`` (forward splat), the raw depth."""
@@ -343,18 +354,26 @@ def _source_maps(views, camera: Camera, method: str, footprint: str, splat: str,
 
 
 def _render(views, camera, weights, *, method, footprint, splat, mesh_options, interpolation, composite_mode,
-            depth_tol, dtype, silhouettes=False):
+            depth_tol, dtype, silhouettes=False, rematte=False):
     """Render one or two sources into ``camera`` and composite them (output arrays are fresh).
     ``mesh_options``: one dict per view. ``silhouettes``: mixed silhouette pixels of each
     source get low trust where the two layers agree (:func:`~ibr.render.composite.source_trust`).
     :attr:`Composite.replace` marks the covered pixels the fill should recolour: background-rim
-    samples beside their layer's gap and stray samples (:func:`_stray_samples`)."""
+    samples beside their layer's gap and stray samples (:func:`_stray_samples`). ``rematte``
+    (with ``silhouettes``, two sources): foreground-rim samples are re-composited over the
+    target's background (:mod:`ibr.render.matting`)."""
     maps = _source_maps(views, camera, method, footprint, splat, mesh_options)
     if not any(m.coverage.any() for m in maps):
         return None
     comp = _composite_maps(views, maps, camera, weights, method=method, mesh_options=mesh_options,
                            interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
                            dtype=dtype, silhouettes=silhouettes)
+    if rematte and silhouettes and len(views) == 2 and method == "mesh":
+        # foreground rims over the target's background (not for supersampled sources, whose rims are
+        # subsamples placed by their colour: clutter's band 31.06 -> 31.00 dB with it)
+        color = comp.color if comp.color.ndim == 3 else comp.color[..., None]
+        rematte_rims(color, comp.depth, camera, maps, [_source(v).rim_matte(_mesh_key(o)) for v, o in
+                                                        zip(views, mesh_options)], [v.depth.shape for v in views])
     stray = _stray_samples(maps, views, comp.coverage)
     if stray is None:
         return comp
@@ -701,7 +720,7 @@ def _frames(view_a, view_b, cams, ts, k, opts, *, method, footprint, splat, inte
         cam_k = supersampled_camera(cam, k)
         comp = _render([view_a, view_b], cam_k, w, method=method, footprint=footprint, splat=splat,
                        mesh_options=opts, interpolation=interpolation, composite_mode=composite_mode,
-                       depth_tol=depth_tol, dtype=view_a.color.dtype, silhouettes=silhouettes)
+                       depth_tol=depth_tol, dtype=view_a.color.dtype, silhouettes=silhouettes, rematte=k == 1)
         if comp is None:
             raise _nothing_seen(cam, [view_a.name, view_b.name], tv)
         previous = _finish(comp, cam_k, tv, fill, previous, view_a.color.ndim == 2,
