@@ -38,16 +38,16 @@ def _kernels_compiled_by(run: str, env) -> list[str]:
 
 def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the plane fit, the
-    rasterizer, the foreground-rim re-composite and the fill kernels; a real interpolation afterwards compiles none of those (it
+    rasterizer and the fill kernels; a real interpolation afterwards compiles none of those (it
     loads them), only the segmentation's edge prefix and split and the compositor."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
     marks = tmp_path / "marks"
     marks.mkdir()
     subprocess.run([sys.executable, "-m", "ibr.render.warmup", "frame", str(marks)], env=env, check=True, timeout=300)
-    assert sorted(p.name for p in marks.iterdir()) == ["fill", "matte", "raster"]  # each group marked once cached
+    assert sorted(p.name for p in marks.iterdir()) == ["fill", "raster"]  # each group marked once cached
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push",
-            "_fill_kernels.axis_background", "_matting_kernels.rim_updates"} <= cached
+            "_fill_kernels.axis_background"} <= cached
     # the segmentation and the plane fit are the main process's (it reaches them first)
     assert not {n for n in cached if n.startswith("_segment_kernels")}
     compiled = _kernels_compiled_by(
@@ -56,7 +56,7 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
         "from samples import DATA_DIR\n"
         "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
         "interpolate(a, b, 0.5, fill='inpaint')\n", env)
-    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_matting_kernels"))]
+    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels"))]
     # the main process's share: the segmentation's edge prefix, split and plane fit, the compositor
     assert {"_segment_kernels._split_edges_kernel", "_segment_kernels._fit_planes_kernel",
             "_composite_kernels.composite_rgbt"} <= set(compiled)
@@ -317,7 +317,7 @@ def test_kernels_cached_for_another_source_count_as_a_first_run(tmp_path, monkey
 def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, monkeypatch):
     """start_helper runs the "frame" helper with NUMBA_OPT=2 (its kernels compile faster and run
     as fast; a user's NUMBA_OPT wins; the other helpers keep numba's default), and a frame
-    rendered from kernels the O2 helper cached (the rasterizer, the rim re-composite, the fill) is
+    rendered from kernels the O2 helper cached (the rasterizer, the fill) is
     bit-identical to one whose kernels were all compiled at the default level."""
     import ibr.base.first_run as fr
 
@@ -364,7 +364,7 @@ def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, 
         out = tmp_path / f"{name}.npz"
         compiled = _kernels_compiled_by(render.replace("sys.argv[1]", repr(str(out))), env)
         if helper_opt:  # the render loaded the helper's -O2 kernels (it compiled none of them)
-            assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_matting_kernels"))]
+            assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels"))]
         outs.append(np.load(out))
     assert np.array_equal(outs[0]["c"], outs[1]["c"])
     assert np.array_equal(outs[0]["z"], outs[1]["z"], equal_nan=True)

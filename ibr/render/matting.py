@@ -16,7 +16,7 @@ two-layer representations), ``C' = C + (1 - alpha) (B_t - B_s)``:
   its own surface (not themselves on a silhouette) and on the farther one; kept where F and B
   differ enough to read alpha (:data:`MIN_CONTRAST`) and alpha < :data:`MAX_ALPHA`, with the
   neighbour toward the background and its colour B_s;
-* per frame (:func:`rematte_rims`, a kernel over the rim pixels), each kept rim pixel is
+* per frame (:func:`rematte_rims`), each kept rim pixel is
   projected into the target; a target pixel of the 2 x 2 around it whose composite shows that
   sample (its layer covers it at the composite's depth and samples that very source pixel, and
   the other source does not see that surface there) and whose pixel toward the background lies
@@ -32,6 +32,7 @@ new background").
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,7 +56,7 @@ _STEP = 0.02
 _RING = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class RimMatte:
     """A source's foreground-rim pixels that can be unmixed (:func:`rim_matte`).
 
@@ -147,10 +148,11 @@ def rematte_rims(color: np.ndarray, depth: np.ndarray, camera: Camera, layers, m
     """Re-composite the target pixels that show an unmixable foreground-rim sample over the
     target's own background, in place in ``color`` (module docstring).
 
-    Each rim pixel is projected into the target and the 2 x 2 pixels around it are tested (one
-    kernel pass over the rim pixels, ``ibr.render._matting_kernels.rim_updates``): the cheap,
-    selective tests first (the composite shows that surface there, its background changed), the
-    maps' exact test last, so a frame costs little more than its rim pixels.
+    The rim pixels of all sources are projected into the target together and the 2 x 2 pixels
+    around each tested, the cheap and selective tests first (the composite shows that surface
+    there and another one behind it, whose colour changed), the maps' exact test last: a frame
+    costs a few dozen array operations on the rim pixels (numpy; a numba kernel ran 4x faster
+    but its compile added 0.58 s to a first ``ibr interpolate``, issue 13's cold start).
 
     Parameters
     ----------
@@ -173,32 +175,94 @@ def rematte_rims(color: np.ndarray, depth: np.ndarray, camera: Camera, layers, m
     int
         The number of pixels re-composited.
     """
-    from ..base.first_run import await_kernels
-    from . import _matting_kernels as _k
-
-    await_kernels("matte")  # a first run: the helper may be caching the kernel right now
-    h, w = depth.shape
     if len(layers) != len(mattes) or len(mattes) != len(source_shapes) or len(mattes) not in (1, 2):
         raise ValueError("layers, mattes, source_shapes: expected one or two of each, as many of each")
+    rims = _joined(tuple(mattes))
+    if not rims.flat.size:
+        return 0
+    h, w = depth.shape
+    zf = depth.reshape(-1)
+    cf = color.reshape(h * w, -1)
+    # the 2 x 2 target pixels around each rim pixel's projection (the order of operations fixed)
     r = camera.cam_from_world
-    rot, trans = np.ascontiguousarray(r[:3, :3]), np.ascontiguousarray(r[:3, 3])
-    updates = []
-    for own, matte in enumerate(mattes):
-        if not len(matte):
-            continue
-        m, shape, other = layers[own], source_shapes[own], layers[-1 - own]  # (one source: itself, unused)
-        out_px = np.empty(4 * len(matte), np.int64)
-        out_val = np.empty((4 * len(matte), color.shape[2]))
-        n = _k.rim_updates(matte.points, rot, trans, camera.fx, camera.fy, camera.cx, camera.cy, matte.flat,
-                           matte.alpha, matte.toward, matte.behind, depth, color, m.map_u, m.map_v, m.depth,
-                           m.coverage, shape[1], shape[0], len(layers) == 2, other.depth, other.coverage,
-                           float(depth_tol), MIN_CHANGE * matte.scale, out_px, out_val)
-        if n:
-            updates.append((out_px[:n], out_val[:n]))
-    count = 0
-    for px, value in updates:  # written after every test read the composite as it was
-        if np.issubdtype(color.dtype, np.integer):
-            value = np.clip(np.rint(value), 0, np.iinfo(color.dtype).max)
-        color[px // w, px % w] = value.astype(color.dtype)
-        count += px.size
-    return count
+    p = rims.points
+    x, y, z = (r[i, 0] * p[:, 0] + r[i, 1] * p[:, 1] + r[i, 2] * p[:, 2] + r[i, 3] for i in range(3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u0 = np.floor(camera.fx * x / z + camera.cx)
+        v0 = np.floor(camera.fy * y / z + camera.cy)
+        near = np.flatnonzero((u0 >= -1) & (u0 < w) & (v0 >= -1) & (v0 < h) & (z > 0))
+    u0, v0 = u0[near].astype(np.int64), v0[near].astype(np.int64)
+    xs = (u0[:, None] + (0, 1, 0, 1)).ravel()
+    ys = (v0[:, None] + (0, 0, 1, 1)).ravel()
+    k = np.repeat(near, 4)
+    inside = (xs >= 0) & (xs < w) & (ys >= 0) & (ys < h)
+    k, ys, xs = k[inside], ys[inside], xs[inside]
+    px = ys * w + xs
+    zt = np.take(zf, px).astype(np.float64)
+    pb = (np.clip(ys + np.take(rims.toward[:, 0], k), 0, h - 1) * w
+          + np.clip(xs + np.take(rims.toward[:, 1], k), 0, w - 1))
+    with np.errstate(invalid="ignore"):  # the composite shows this surface here and another behind it
+        keep = (np.abs(np.take(z, k) - zt) <= depth_tol * zt) & (np.take(zf, pb) > zt * (1.0 + depth_tol))
+    k, px, pb, zt = k[keep], px[keep], pb[keep], zt[keep]
+    b_t = np.take(cf, pb, axis=0).astype(np.float64)
+    behind = np.take(rims.behind, k, axis=0)
+    keep = np.abs(b_t - behind).max(1) > MIN_CHANGE * rims.scale
+    if not keep.any():  # the common case: no rim sample drawn over a new background
+        return 0
+    k, px, zt, b_t, behind = k[keep], px[keep], zt[keep], b_t[keep], behind[keep]
+    own = rims.source[k]
+    shows = [_shows(m, px, zt, depth_tol) for m in layers]
+    keep = np.where(own == 0, shows[0], shows[-1])
+    for j, (maps, shape) in enumerate(zip(layers, source_shapes)):
+        mine = keep & (own == j)
+        keep[mine] = _nearest_flat(maps, px[mine], shape) == rims.flat[k[mine]]  # samples this very rim pixel
+    if len(layers) == 2:  # the other source sees that surface here too: the compositor blends it in
+        keep &= ~np.where(own == 0, shows[1], shows[0])
+    if not keep.any():
+        return 0
+    px, k = px[keep], k[keep]
+    value = np.take(cf, px, axis=0).astype(np.float64) + (1.0 - rims.alpha[k])[:, None] * (b_t[keep] - behind[keep])
+    if np.issubdtype(color.dtype, np.integer):
+        value = np.clip(np.rint(value), 0, np.iinfo(color.dtype).max)
+    color[px // w, px % w] = value.astype(color.dtype)  # after every test read the composite as it was
+    return int(px.size)
+
+
+@dataclass(frozen=True, eq=False)
+class _Rims:
+    """The rim pixels of one or two sources in one set of arrays (``source``: whose)."""
+
+    points: np.ndarray
+    flat: np.ndarray
+    alpha: np.ndarray
+    toward: np.ndarray
+    behind: np.ndarray
+    source: np.ndarray
+    scale: float
+
+
+@functools.lru_cache(maxsize=8)
+def _joined(mattes: tuple) -> _Rims:
+    """:class:`_Rims` of ``mattes`` (cached per pair of mattes: each frame of an interpolation
+    reuses it)."""
+    def cat(name):
+        return np.concatenate([getattr(m, name) for m in mattes])
+
+    source = np.concatenate([np.full(len(m), i, np.int8) for i, m in enumerate(mattes)])
+    return _Rims(cat("points"), cat("flat"), cat("alpha"), cat("toward"), cat("behind"), source, mattes[0].scale)
+
+
+def _shows(maps, px, zt, tol) -> np.ndarray:
+    """Whether a layer covers target pixels ``px`` (flat) at the composite's depth ``zt``."""
+    with np.errstate(invalid="ignore"):
+        return np.take(maps.coverage.reshape(-1), px) & (np.abs(np.take(maps.depth.reshape(-1), px) - zt) <= tol * zt)
+
+
+def _nearest_flat(maps, px, shape) -> np.ndarray:
+    """Flat index of the source pixel nearest to where target pixels ``px`` (flat indices)
+    sample it (rounded as the composite kernels round, clamped to the source)."""
+    mu = np.take(maps.map_u.reshape(-1), px).astype(np.float64)
+    mv = np.take(maps.map_v.reshape(-1), px).astype(np.float64)
+    sy = np.clip(np.floor(mv + 0.5), 0, shape[0] - 1).astype(np.int64)
+    sx = np.clip(np.floor(mu + 0.5), 0, shape[1] - 1).astype(np.int64)
+    return sy * shape[1] + sx

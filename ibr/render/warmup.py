@@ -42,9 +42,8 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     """Call the rasterizer and the hole fill once on a tiny scene (types as in a real run), in
     the order the main process will need them after its own segmentation kernels and plane fit
     (the rasterizer with its crack closing is the longest compile of the first run: the main
-    process, waiting for it, compiles the plane fit itself); mark groups "raster", "matte" (the
-    foreground-rim re-composite of two-source frames) and "fill" (the directional fill and the
-    pull-push) in the directory ``marks`` as they land in the cache.
+    process, waiting for it, compiles the plane fit itself); mark groups "raster" and "fill" (the
+    directional fill and the pull-push) in the directory ``marks`` as they land in the cache.
     :func:`ibr.base.first_run.start_helper` runs this process with LLVM at -O2
     (:data:`ibr.base.first_run.HELPER_OPT`)."""
     from ..base.camera import Camera
@@ -56,10 +55,8 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     moved = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h,
                    np.array([[1, 0, 0, 0.3], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]))
     # as view synthesis rasterizes: with its crack closing
-    maps = _rasterize_many_into([mesh], moved, "free", 0.01, [scratch_maps("warm", moved.shape)], crack_rel=CRACK_REL)
+    _rasterize_many_into([mesh], moved, "free", 0.01, [scratch_maps("warm", moved.shape)], crack_rel=CRACK_REL)
     _mark(marks, "raster")
-    _warm_matting(mesh, moved, maps[0])
-    _mark(marks, "matte")
     color = np.full((h, w, 3), 128, np.uint8)
     depth = np.full((h, w), 3.0, np.float32)
     holes = np.zeros((h, w), np.bool_)
@@ -67,20 +64,6 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     depth[holes] = np.nan
     fill._fill_pullpush_inplace(color, depth, holes, axis=0)
     _mark(marks, "fill")
-
-
-def _warm_matting(mesh, camera, maps) -> None:
-    """The foreground-rim re-composite of a two-source frame (:func:`ibr.render.matting.rematte_rims`)
-    on the tiny mesh's rasterized maps, with a real run's argument types (8-bit colour)."""
-    from .matting import rematte_rims, rim_matte
-
-    h, w = mesh.camera.shape
-    color = np.full((h, w, 3), 128, np.uint8)
-    color[:, w // 2:] = 20
-    color[:, w // 2 - 1] = 74  # the near side's rim: half foreground (kept, so the kernel runs)
-    matte = rim_matte(color, mesh.depth(), mesh.camera)
-    target = np.full((*camera.shape, 3), 128, np.uint8)
-    rematte_rims(target, maps.depth.copy(), camera, [maps, maps], [matte, matte], [(h, w), (h, w)])
 
 
 def _tiny_mesh():
