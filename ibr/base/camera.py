@@ -56,7 +56,9 @@ def _check_pose(name: str, pose) -> np.ndarray:
     if not np.allclose(m[3], [0, 0, 0, 1], rtol=0, atol=1e-9):
         raise ValueError(f"{name}: last row must be [0, 0, 0, 1], got {m[3].tolist()}")
     r = m[:3, :3]
-    if not np.allclose(r @ r.T, np.eye(3), rtol=0, atol=1e-5) or np.linalg.det(r) < 0:
+    with np.errstate(over="ignore", invalid="ignore"):  # huge entries overflow to inf: not a rotation either
+        orthonormal = np.allclose(r @ r.T, np.eye(3), rtol=0, atol=1e-5)
+    if not orthonormal or np.linalg.det(r) < 0:
         raise ValueError(f"{name}: rotation block must be a proper rotation (orthonormal, det +1)")
     return m
 
