@@ -362,18 +362,23 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
     samples beside their layer's gap and stray samples (:func:`_stray_samples`). ``rematte``
     (with ``silhouettes``, two sources): foreground-rim samples are re-composited over the
     target's background (:mod:`ibr.render.matting`)."""
+    mattes = None
+    if rematte and silhouettes and len(views) == 2 and method == "mesh":
+        # foreground rims over the target's background (not for supersampled sources, whose rims are
+        # subsamples placed by their colour: clutter's band 31.06 -> 31.00 dB with it); made before
+        # the frame's maps exist (1080p peak memory)
+        for v, o in zip(views, mesh_options):
+            source_mesh(v, **o)  # (cached) the matte reads its mesh's depth
+        mattes = [_source(v).rim_matte(_mesh_key(o)) for v, o in zip(views, mesh_options)]
     maps = _source_maps(views, camera, method, footprint, splat, mesh_options)
     if not any(m.coverage.any() for m in maps):
         return None
     comp = _composite_maps(views, maps, camera, weights, method=method, mesh_options=mesh_options,
                            interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
                            dtype=dtype, silhouettes=silhouettes)
-    if rematte and silhouettes and len(views) == 2 and method == "mesh":
-        # foreground rims over the target's background (not for supersampled sources, whose rims are
-        # subsamples placed by their colour: clutter's band 31.06 -> 31.00 dB with it)
+    if mattes is not None:
         color = comp.color if comp.color.ndim == 3 else comp.color[..., None]
-        rematte_rims(color, comp.depth, camera, maps, [_source(v).rim_matte(_mesh_key(o)) for v, o in
-                                                        zip(views, mesh_options)], [v.depth.shape for v in views])
+        rematte_rims(color, comp.depth, camera, maps, mattes, [v.depth.shape for v in views])
     stray = _stray_samples(maps, views, comp.coverage)
     if stray is None:
         return comp
