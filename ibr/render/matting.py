@@ -104,43 +104,48 @@ def rim_matte(color: np.ndarray, depth: np.ndarray, camera: Camera, *, quantizat
         raise ValueError(f"camera: expected a Camera of the depth's shape {z.shape}")
     scale = _full_scale(c.dtype)
     both = mixed_pixels(z, side="both", quantization=quantization)
-    near = both & ~mixed_pixels(z, side="far", quantization=quantization)
-    ys, xs = np.nonzero(near)
+    ys, xs = np.nonzero(both & ~mixed_pixels(z, side="far", quantization=quantization))  # the near side
+    fg, bg, toward = _side_means(c, z, both, ys, xs)
+    diff = fg - bg
+    contrast2 = (diff * diff).sum(1)
+    alpha = np.clip(((c[ys, xs] - bg) * diff).sum(1) / np.maximum(contrast2, 1e-30), 0.0, 1.0)
+    keep = ~np.isnan(contrast2) & (contrast2 >= (MIN_CONTRAST * scale) ** 2 * c.shape[2]) & (alpha < MAX_ALPHA)
+    ys, xs, toward = ys[keep], xs[keep], toward[keep]
+    h, w = z.shape
+    points = camera.unproject(np.stack([xs, ys], -1).astype(np.float64), z[ys, xs])
+    by = np.clip(ys + toward[:, 0], 0, h - 1)
+    bx = np.clip(xs + toward[:, 1], 0, w - 1)
+    behind = c[by, bx].astype(np.float64)
+    return RimMatte(ys.astype(np.int64) * w + xs, points, alpha[keep], toward, behind, scale)
+
+
+def _side_means(c, z, both, ys, xs):
+    """Per rim pixel (ys, xs): the mean colours (N, C) of its 3 x 3 neighbours on its own surface
+    (within :data:`_STEP`, not on a silhouette themselves) and on a farther one (NaN where it has
+    none), and the 8-neighbour (dy, dx) nearest to the mean direction of the farther ones."""
     h, w = z.shape
     zp = z[ys, xs]
     n, nc = ys.size, c.shape[2]
-    f_sum, b_sum = np.zeros((n, nc)), np.zeros((n, nc))
-    f_n, b_n = np.zeros(n), np.zeros(n)
-    b_dir = np.zeros((n, 2))
+    sums = {"own": np.zeros((n, nc)), "behind": np.zeros((n, nc))}
+    counts = {"own": np.zeros(n), "behind": np.zeros(n)}
+    direction = np.zeros((n, 2))
     for dy, dx in _RING:
         jy, jx = ys + dy, xs + dx
         inside = (jy >= 0) & (jy < h) & (jx >= 0) & (jx < w)
         jy, jx = np.clip(jy, 0, h - 1), np.clip(jx, 0, w - 1)
         zq, cq = z[jy, jx], c[jy, jx].astype(np.float64)
         with np.errstate(invalid="ignore"):
-            own = inside & (np.abs(zq - zp) <= _STEP * zp) & ~both[jy, jx]
-            behind = inside & (zq > zp * (1.0 + _STEP))
-        f_sum += own[:, None] * cq
-        f_n += own
-        b_sum += behind[:, None] * cq
-        b_n += behind
-        b_dir += behind[:, None] * (dy, dx)
-    fg = f_sum / np.maximum(f_n, 1.0)[:, None]
-    bg = b_sum / np.maximum(b_n, 1.0)[:, None]
-    diff = fg - bg
-    contrast2 = (diff * diff).sum(1)
-    mix = c[ys, xs].astype(np.float64)
-    alpha = np.clip(((mix - bg) * diff).sum(1) / np.maximum(contrast2, 1e-30), 0.0, 1.0)
-    keep = (f_n > 0) & (b_n > 0) & (contrast2 >= (MIN_CONTRAST * scale) ** 2 * nc) & (alpha < MAX_ALPHA)
-    ys, xs = ys[keep], xs[keep]
-    points = camera.unproject(np.stack([xs, ys], -1).astype(np.float64), zp[keep])
-    # the 8-neighbour nearest to the mean direction of the farther neighbours
-    angle = np.arctan2(b_dir[keep, 0], b_dir[keep, 1])
+            sides = {"own": inside & (np.abs(zq - zp) <= _STEP * zp) & ~both[jy, jx],
+                     "behind": inside & (zq > zp * (1.0 + _STEP))}
+        for side, m in sides.items():
+            sums[side] += m[:, None] * cq
+            counts[side] += m
+        direction += sides["behind"][:, None] * (dy, dx)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fg, bg = (sums[s] / counts[s][:, None] for s in ("own", "behind"))
+    angle = np.arctan2(direction[:, 0], direction[:, 1])
     toward = np.stack([np.rint(np.sin(angle)), np.rint(np.cos(angle))], -1).astype(np.int64)
-    by = np.clip(ys + toward[:, 0], 0, h - 1)
-    bx = np.clip(xs + toward[:, 1], 0, w - 1)
-    behind = c[by, bx].astype(np.float64)
-    return RimMatte(ys.astype(np.int64) * w + xs, points, alpha[keep], toward, behind, scale)
+    return fg, bg, toward
 
 
 def rematte_rims(color: np.ndarray, depth: np.ndarray, camera: Camera, layers, mattes, source_shapes,

@@ -780,7 +780,9 @@ def interpolate(
     silhouettes : bool
         Give the mixed pixels on both sides of every depth discontinuity of a source low weight
         where both sources see the same surface (default), so the clean pixel of the other
-        source wins (no ghost outlines); ``False`` is issue 4's plain viewpoint blend.
+        source wins (no ghost outlines), and re-mix a foreground rim that only one source sees
+        with the background the target sees behind it (:mod:`ibr.render.matting`; not with
+        ``supersample``); ``False`` is issue 4's plain viewpoint blend.
     supersample : {1, 3, 5}
         As in :func:`warp`: sources upsampled with sub-pixel silhouettes, k x k subsamples per
         pixel box-filtered at depth edges; about k^2 the frame time (the fill and the
