@@ -171,3 +171,36 @@ def test_bad_input_is_refused_by_name():
     assert isinstance(m, RimMatte)
     with pytest.raises(ValueError, match="layers, mattes, source_shapes"):
         rematte_rims(color, depth, cam, [], [m], [depth.shape])
+
+
+def test_hard_cases_behind_the_camera_wide_fields_and_missing_depth(clutter):
+    """Rim pixels behind the target camera, a 150-degree target and sources with holes in their
+    depth: no error, no warning, and only covered pixels change."""
+    import warnings
+
+    a, b, _, g, _ = clutter
+    holes = [v.depth.copy() for v in (a, b)]
+    for z in holes:
+        z[100:140, 200:260] = np.nan  # a hole beside the dark sphere's rim
+        z[0, :] = np.inf
+    views = [vs.View(v.color, z, v.camera, v.name) for v, z in zip((a, b), holes)]
+    turned = g.camera.with_pose(g.camera.world_from_cam @ np.diag([-1.0, 1.0, -1.0, 1.0]))  # looking back
+    wide = Camera.from_fov(g.camera.width, g.camera.height, hfov_deg=150.0, world_from_cam=g.camera.world_from_cam)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        for cam in (g.camera, wide):
+            r = vs.interpolate(*views, cam, fill="none")
+            plain = _without_rematte_plain(views, cam)
+            changed = np.any(r.color != plain.color, axis=-1)
+            assert not (changed & r.holes).any()
+        with pytest.raises(ValueError):  # nothing of the scene in view: the usual error, not ours
+            vs.interpolate(*views, turned, fill="none")
+
+
+def _without_rematte_plain(views, cam):
+    real = vs.rematte_rims
+    vs.rematte_rims = lambda *args, **kw: 0
+    try:
+        return vs.interpolate(*views, cam, fill="none")
+    finally:
+        vs.rematte_rims = real
