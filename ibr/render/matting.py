@@ -183,12 +183,26 @@ def rematte_rims(color: np.ndarray, depth: np.ndarray, camera: Camera, layers, m
     if len(layers) != len(mattes) or len(mattes) != len(source_shapes) or len(mattes) not in (1, 2):
         raise ValueError("layers, mattes, source_shapes: expected one or two of each, as many of each")
     rims = _joined(tuple(mattes))
-    if not rims.flat.size:
+    h, w = depth.shape
+    k, px, b_t = _candidates(rims, color, depth, camera, depth_tol)
+    if not k.size:  # the common case: no rim sample drawn over a new background
         return 0
+    keep = _shown_alone(rims, k, px, layers, source_shapes, depth, depth_tol)
+    px, k = px[keep], k[keep]
+    change = b_t[keep] - rims.behind[k]
+    value = color.reshape(h * w, -1)[px].astype(np.float64) + (1.0 - rims.alpha[k])[:, None] * change
+    if np.issubdtype(color.dtype, np.integer):
+        value = np.clip(np.rint(value), 0, np.iinfo(color.dtype).max)
+    color[px // w, px % w] = value.astype(color.dtype)  # after every test read the composite as it was
+    return int(px.size)
+
+
+def _candidates(rims, color, depth, camera: Camera, tol: float):
+    """The target pixels (flat ``px``) of the 2 x 2 around each rim pixel's projection (``k``:
+    which) where the composite shows that surface and, toward the background, a farther one
+    whose colour ``b_t`` (N, C) float64 differs from the source's by more than :data:`MIN_CHANGE`."""
     h, w = depth.shape
     zf = depth.reshape(-1)
-    cf = color.reshape(h * w, -1)
-    # the 2 x 2 target pixels around each rim pixel's projection (the order of operations fixed)
     r = camera.cam_from_world
     p = rims.points
     x, y, z = (r[i, 0] * p[:, 0] + r[i, 1] * p[:, 1] + r[i, 2] * p[:, 2] + r[i, 3] for i in range(3))
@@ -207,30 +221,26 @@ def rematte_rims(color: np.ndarray, depth: np.ndarray, camera: Camera, layers, m
     pb = (np.clip(ys + np.take(rims.toward[:, 0], k), 0, h - 1) * w
           + np.clip(xs + np.take(rims.toward[:, 1], k), 0, w - 1))
     with np.errstate(invalid="ignore"):  # the composite shows this surface here and another behind it
-        keep = (np.abs(np.take(z, k) - zt) <= depth_tol * zt) & (np.take(zf, pb) > zt * (1.0 + depth_tol))
-    k, px, pb, zt = k[keep], px[keep], pb[keep], zt[keep]
-    b_t = np.take(cf, pb, axis=0).astype(np.float64)
-    behind = np.take(rims.behind, k, axis=0)
-    keep = np.abs(b_t - behind).max(1) > MIN_CHANGE * rims.scale
-    if not keep.any():  # the common case: no rim sample drawn over a new background
-        return 0
-    k, px, zt, b_t, behind = k[keep], px[keep], zt[keep], b_t[keep], behind[keep]
+        keep = (np.abs(np.take(z, k) - zt) <= tol * zt) & (np.take(zf, pb) > zt * (1.0 + tol))
+    k, px, pb = k[keep], px[keep], pb[keep]
+    b_t = np.take(color.reshape(h * w, -1), pb, axis=0).astype(np.float64)
+    keep = np.abs(b_t - np.take(rims.behind, k, axis=0)).max(1) > MIN_CHANGE * rims.scale
+    return k[keep], px[keep], b_t[keep]
+
+
+def _shown_alone(rims, k, px, layers, source_shapes, depth, tol) -> np.ndarray:
+    """Whether each candidate's own layer samples exactly its rim pixel at the composite's depth
+    and (two sources) the other layer does not show that surface there."""
+    zt = np.take(depth.reshape(-1), px).astype(np.float64)
     own = rims.source[k]
-    shows = [_shows(m, px, zt, depth_tol) for m in layers]
+    shows = [_shows(m, px, zt, tol) for m in layers]
     keep = np.where(own == 0, shows[0], shows[-1])
     for j, (maps, shape) in enumerate(zip(layers, source_shapes)):
         mine = keep & (own == j)
-        keep[mine] = _nearest_flat(maps, px[mine], shape) == rims.flat[k[mine]]  # samples this very rim pixel
+        keep[mine] = _nearest_flat(maps, px[mine], shape) == rims.flat[k[mine]]
     if len(layers) == 2:  # the other source sees that surface here too: the compositor blends it in
         keep &= ~np.where(own == 0, shows[1], shows[0])
-    if not keep.any():
-        return 0
-    px, k = px[keep], k[keep]
-    value = np.take(cf, px, axis=0).astype(np.float64) + (1.0 - rims.alpha[k])[:, None] * (b_t[keep] - behind[keep])
-    if np.issubdtype(color.dtype, np.integer):
-        value = np.clip(np.rint(value), 0, np.iinfo(color.dtype).max)
-    color[px // w, px % w] = value.astype(color.dtype)  # after every test read the composite as it was
-    return int(px.size)
+    return keep
 
 
 @dataclass(frozen=True, eq=False)
