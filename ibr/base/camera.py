@@ -180,13 +180,17 @@ class Camera:
 
     @property
     def cam_from_world(self) -> np.ndarray:
-        """4x4 world-to-camera transform (inverse of the pose)."""
-        r = self.world_from_cam[:3, :3]
-        t = self.world_from_cam[:3, 3]
-        m = np.eye(4)
-        m[:3, :3] = r.T
-        m[:3, 3] = -r.T @ t
-        return m
+        """4x4 world-to-camera transform (inverse of the pose); a fresh array each time (made
+        once per camera: a frame asks for it several times)."""
+        m = self.__dict__.get("_cam_from_world")
+        if m is None:
+            r = self.world_from_cam[:3, :3]
+            t = self.world_from_cam[:3, 3]
+            m = np.eye(4)
+            m[:3, :3] = r.T
+            m[:3, 3] = -r.T @ t
+            object.__setattr__(self, "_cam_from_world", m)
+        return m.copy()
 
     @property
     def position(self) -> np.ndarray:

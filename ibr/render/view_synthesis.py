@@ -188,14 +188,16 @@ class _Source:
             self._trust[key] = got
         return got
 
-    def rim_matte(self, mesh_key):
+    def rim_matte(self, mesh_options: dict):
         """:func:`~ibr.render.matting.rim_matte` of the source, from the depth of its mesh for
-        ``mesh_key`` (cached like :meth:`trust`)."""
-        key = ("matte", mesh_key)
-        m = self._trust.get(key)
+        ``mesh_options`` (built if need be; cached like :meth:`trust`)."""
+        mesh_key = _mesh_key(mesh_options)
+        m = self._trust.get(("matte", mesh_key))
         if m is None:
-            m = self._trust[key] = rim_matte(self.raw, self._source_depth(mesh_key), self._view().camera,
-                                             quantization=self._quantization(mesh_key))
+            view = self._view()
+            source_mesh(view, **mesh_options)  # (cached) the matte reads its mesh's depth
+            m = self._trust[("matte", mesh_key)] = rim_matte(self.raw, self._source_depth(mesh_key), view.camera,
+                                                             quantization=self._quantization(mesh_key))
         return m
 
     def _source_depth(self, mesh_key):
@@ -367,9 +369,7 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
         # foreground rims over the target's background (not for supersampled sources, whose rims are
         # subsamples placed by their colour: clutter's band 31.06 -> 31.00 dB with it); made before
         # the frame's maps exist (1080p peak memory)
-        for v, o in zip(views, mesh_options):
-            source_mesh(v, **o)  # (cached) the matte reads its mesh's depth
-        mattes = [_source(v).rim_matte(_mesh_key(o)) for v, o in zip(views, mesh_options)]
+        mattes = [_source(v).rim_matte(o) for v, o in zip(views, mesh_options)]
     maps = _source_maps(views, camera, method, footprint, splat, mesh_options)
     if not any(m.coverage.any() for m in maps):
         return None
