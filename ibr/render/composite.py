@@ -180,13 +180,18 @@ def _mark(out: np.ndarray, q: np.ndarray, axis: int, rel: float, ratio: float, s
     out[second] |= step & second_far
 
 
-def source_trust(depth, *, mixed_trust: float = MIXED_TRUST, quantization=None) -> np.ndarray:
+def source_trust(depth=None, *, mixed_trust: float = MIXED_TRUST, quantization=None, mixed=None) -> np.ndarray:
     """(H, W) float32 trust of each source pixel's colour: ``mixed_trust`` on the mixed pixels
-    of :func:`mixed_pixels` (with the depth's ``quantization``, if any), 1 elsewhere. Sampled bilinearly with the colour, it scales the blend
+    of :func:`mixed_pixels` (with the depth's ``quantization``, if any; or ``mixed``, those
+    pixels already found, instead of ``depth``), 1 elsewhere. Sampled bilinearly with the colour, it scales the blend
     weights where two sources see the same surface, so a clean pixel of the other source wins
     over a silhouette pixel that carries the other surface's colour (the ghost outline)."""
-    t = np.ones(np.shape(depth), np.float32)
-    t[mixed_pixels(depth, quantization=quantization)] = np.float32(mixed_trust)
+    if (depth is None) == (mixed is None):
+        raise ValueError("depth, mixed: give exactly one (the depth, or its mixed pixels)")
+    if mixed is None:
+        mixed = mixed_pixels(depth, quantization=quantization)
+    t = np.ones(np.shape(mixed), np.float32)
+    t[np.asarray(mixed, bool)] = np.float32(mixed_trust)
     return t
 
 

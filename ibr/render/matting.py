@@ -82,7 +82,8 @@ def _full_scale(dtype) -> float:
     return float(np.iinfo(dtype).max) if np.issubdtype(dtype, np.integer) else 1.0
 
 
-def rim_matte(color: np.ndarray, depth: np.ndarray, camera: Camera, *, quantization=None) -> RimMatte:
+def rim_matte(color: np.ndarray, depth: np.ndarray, camera: Camera, *, quantization=None,
+              silhouettes=None) -> RimMatte:
     """The unmixable foreground-rim pixels of a source (module docstring).
 
     Parameters
@@ -95,6 +96,9 @@ def rim_matte(color: np.ndarray, depth: np.ndarray, camera: Camera, *, quantizat
         Its camera (the rim pixels' world points).
     quantization : DepthQuantization, optional
         The depth's encoding (:func:`~ibr.render.composite.mixed_pixels`).
+    silhouettes : (both, far) of (H, W) bool, optional
+        :func:`~ibr.render.composite.mixed_pixels` of ``depth`` on both sides of each step and on
+        its far side, if already found (then ``quantization`` is not used).
     """
     c = np.asarray(color)
     z = np.asarray(depth, np.float64)
@@ -103,8 +107,12 @@ def rim_matte(color: np.ndarray, depth: np.ndarray, camera: Camera, *, quantizat
     if not isinstance(camera, Camera) or camera.shape != z.shape:
         raise ValueError(f"camera: expected a Camera of the depth's shape {z.shape}")
     scale = _full_scale(c.dtype)
-    both = mixed_pixels(z, side="both", quantization=quantization)
-    ys, xs = np.nonzero(both & ~mixed_pixels(z, side="far", quantization=quantization))  # the near side
+    if silhouettes is None:
+        silhouettes = (mixed_pixels(z, quantization=quantization), mixed_pixels(z, side="far", quantization=quantization))
+    both, far = (np.asarray(m, bool) for m in silhouettes)
+    if both.shape != z.shape or far.shape != z.shape:
+        raise ValueError(f"silhouettes: expected two (H, W) masks of the depth's shape {z.shape}")
+    ys, xs = np.nonzero(both & ~far)  # the near side
     fg, bg, toward = _side_means(c, z, both, ys, xs)
     diff = fg - bg
     contrast2 = (diff * diff).sum(1)

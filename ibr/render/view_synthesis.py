@@ -155,11 +155,23 @@ class _Source:
         depth codes are no steps) or, for ``None`` (forward splat), from the raw depth."""
         t = self._trust.get(mesh_key)
         if t is None:
-            depth, quant = self._source_depth(mesh_key), self._quantization(mesh_key)
-            t = self._trust[mesh_key] = pack_trust(source_trust(depth, quantization=quant),
-                                                   mixed_pixels(depth, side="far", quantization=quant))
+            mixed, far = self.silhouettes(mesh_key)
+            t = self._trust[mesh_key] = pack_trust(source_trust(mixed=mixed), far)
             t.setflags(write=False)
         return t
+
+    def silhouettes(self, mesh_key) -> tuple[np.ndarray, np.ndarray]:
+        """(H, W) bool :func:`~ibr.render.composite.mixed_pixels` of the depth of its mesh for
+        ``mesh_key`` (or the raw depth for ``None``), on both sides of each step and on its far
+        side, made once: the trust, the background rims and the rim mattes all read them."""
+        got = self._trust.get(("silhouettes", mesh_key))
+        if got is None:
+            depth, quant = self._source_depth(mesh_key), self._quantization(mesh_key)
+            got = (mixed_pixels(depth, quantization=quant), mixed_pixels(depth, side="far", quantization=quant))
+            for x in got:
+                x.setflags(write=False)
+            self._trust[("silhouettes", mesh_key)] = got
+        return got
 
     def rgbt(self, mesh_key, silhouettes: bool, scale: int = 1):
         """For an 8-bit three-channel source, what :func:`~ibr.render.composite.remap_composite`
@@ -171,9 +183,8 @@ class _Source:
         got = self._trust.get(key)
         if got is None:
             depth = self._source_depth(mesh_key) if silhouettes or scale != 1 else None
-            quant = self._quantization(mesh_key)
-            rims = mixed_pixels(depth, side="far", quantization=quant) if silhouettes else None
-            trust = trust_channel(source_trust(depth, quantization=quant), depth.shape) if silhouettes else 255
+            mixed, rims = self.silhouettes(mesh_key) if silhouettes else (None, None)
+            trust = trust_channel(source_trust(mixed=mixed), depth.shape) if silhouettes else 255
             if scale == 1:
                 color = rgbt_source(self.raw)
                 color[..., 3] = trust
@@ -197,7 +208,7 @@ class _Source:
             view = self._view()
             source_mesh(view, **mesh_options)  # (cached) the matte reads its mesh's depth
             m = self._trust[("matte", mesh_key)] = rim_matte(self.raw, self._source_depth(mesh_key), view.camera,
-                                                             quantization=self._quantization(mesh_key))
+                                                             silhouettes=self.silhouettes(mesh_key))
         return m
 
     def _source_depth(self, mesh_key):
