@@ -185,6 +185,8 @@ class _Source:
             depth = self._source_depth(mesh_key) if silhouettes or scale != 1 else None
             mixed, rims = self.silhouettes(mesh_key) if silhouettes else (None, None)
             trust = trust_channel(source_trust(mixed=mixed), depth.shape) if silhouettes else 255
+            self._trust.pop(("silhouettes", mesh_key), None)  # kept here (the rims) or no longer needed
+            del mixed  # (1080p peak memory: two frame-sized masks less while the frame is composited)
             if scale == 1:
                 color = rgbt_source(self.raw)
                 color[..., 3] = trust
