@@ -239,13 +239,15 @@ def _candidates(rims, color, depth, camera: Camera, tol: float):
 def _shown_alone(rims, k, px, layers, source_shapes, depth, tol) -> np.ndarray:
     """Whether each candidate's own layer samples exactly its rim pixel at the composite's depth
     and (two sources) the other layer does not show that surface there."""
+    w = depth.shape[1]
     zt = np.take(depth.reshape(-1), px).astype(np.float64)
     own = rims.source[k]
     shows = [_shows(m, px, zt, tol) for m in layers]
     keep = np.where(own == 0, shows[0], shows[-1])
     for j, (maps, shape) in enumerate(zip(layers, source_shapes)):
         mine = keep & (own == j)
-        keep[mine] = _nearest_flat(maps, px[mine], shape) == rims.flat[k[mine]]
+        sy, sx = maps.nearest_source_pixel(px[mine] // w, px[mine] % w, shape)
+        keep[mine] = sy * shape[1] + sx == rims.flat[k[mine]]
     if len(layers) == 2:  # the other source sees that surface here too: the compositor blends it in
         keep &= ~np.where(own == 0, shows[1], shows[0])
     return keep
@@ -279,13 +281,3 @@ def _shows(maps, px, zt, tol) -> np.ndarray:
     """Whether a layer covers target pixels ``px`` (flat) at the composite's depth ``zt``."""
     with np.errstate(invalid="ignore"):
         return np.take(maps.coverage.reshape(-1), px) & (np.abs(np.take(maps.depth.reshape(-1), px) - zt) <= tol * zt)
-
-
-def _nearest_flat(maps, px, shape) -> np.ndarray:
-    """Flat index of the source pixel nearest to where target pixels ``px`` (flat indices)
-    sample it (rounded as the composite kernels round, clamped to the source)."""
-    mu = np.take(maps.map_u.reshape(-1), px).astype(np.float64)
-    mv = np.take(maps.map_v.reshape(-1), px).astype(np.float64)
-    sy = np.clip(np.floor(mv + 0.5), 0, shape[0] - 1).astype(np.int64)
-    sx = np.clip(np.floor(mu + 0.5), 0, shape[1] - 1).astype(np.int64)
-    return sy * shape[1] + sx

@@ -108,6 +108,15 @@ class SourceMaps:
     depth: np.ndarray
     coverage: np.ndarray
 
+    def nearest_source_pixel(self, ys, xs, shape) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, columns) of the source pixel nearest to where target pixels (ys, xs) sample
+        the source, clamped to its ``shape`` (H_s, W_s); rounded as the composite kernels round
+        (``_nearest``): x + 0.5 in float64 (in float32 it rounds up from just below 0.5)."""
+        h, w = shape
+        u = np.clip(np.floor(self.map_u[ys, xs].astype(np.float64) + 0.5), 0, w - 1).astype(np.intp)
+        v = np.clip(np.floor(self.map_v[ys, xs].astype(np.float64) + 0.5), 0, h - 1).astype(np.intp)
+        return v, u
+
 
 def _intrinsics(cam: Camera) -> np.ndarray:
     return np.array([cam.fx, cam.fy, cam.cx, cam.cy], dtype=np.float64)

@@ -461,7 +461,7 @@ def _stray_samples(maps, views, coverage) -> np.ndarray | None:
     for m, view in zip(maps, views):
         on = np.flatnonzero(m.coverage[ys, xs])
         lone = _source(view).lone
-        keep[on] |= lone[_nearest_source_pixel(m, ys[on], xs[on], lone.shape)]
+        keep[on] |= lone[m.nearest_source_pixel(ys[on], xs[on], lone.shape)]
     stray = np.zeros(coverage.shape, bool)
     stray[ys[~keep], xs[~keep]] = True
     return stray if stray.any() else None
@@ -478,7 +478,7 @@ def _rim_samples_beside_gaps(maps, rims) -> np.ndarray:
         alone = m.coverage & ~maps[1 - i].coverage
         ys, xs = _pixels_of(alone)
         rim = np.zeros(replace.shape, bool)
-        rim[ys, xs] = r[_nearest_source_pixel(m, ys, xs, r.shape)]
+        rim[ys, xs] = r[m.nearest_source_pixel(ys, xs, r.shape)]
         replace |= rim_beside_holes(m.coverage, rim)
     return replace
 
@@ -493,16 +493,6 @@ def _pixels_of(mask) -> tuple[np.ndarray, np.ndarray]:
         return np.empty(0, np.intp), np.empty(0, np.intp)
     xs, ys = found.reshape(-1, 2).T
     return ys, xs
-
-
-def _nearest_source_pixel(maps, ys, xs, shape) -> tuple[np.ndarray, np.ndarray]:
-    """(rows, columns) of the source pixel nearest to where target pixels (ys, xs) sample their
-    source (``maps``), clamped to its ``shape``; rounded as the composite kernels round
-    (``_nearest``): x + 0.5 in float64 (in float32 it rounds up from just below 0.5)."""
-    h, w = shape
-    u = np.clip(np.floor(maps.map_u[ys, xs].astype(np.float64) + 0.5), 0, w - 1).astype(np.intp)
-    v = np.clip(np.floor(maps.map_v[ys, xs].astype(np.float64) + 0.5), 0, h - 1).astype(np.intp)
-    return v, u
 
 
 def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
