@@ -158,6 +158,7 @@ class _Source:
             mixed, far = self.silhouettes(mesh_key)
             t = self._trust[mesh_key] = pack_trust(source_trust(mixed=mixed), far)
             t.setflags(write=False)
+            self._trust.pop(("silhouettes", mesh_key), None)  # in the packed trust now (as in :meth:`rgbt`)
         return t
 
     def silhouettes(self, mesh_key) -> tuple[np.ndarray, np.ndarray]:
