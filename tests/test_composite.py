@@ -248,3 +248,17 @@ def test_view_synthesis_never_reads_the_maps_of_uncovered_pixels(monkeypatch, op
     assert 0.1 < inside.holes.mean() < 0.25  # many uncovered pixels
     np.testing.assert_array_equal(inside.holes, far.holes)
     np.testing.assert_array_equal(inside.color, far.color)
+
+
+def test_source_trust_from_the_depth_or_from_its_mixed_pixels_alike():
+    """``source_trust(mixed=...)`` (the mask already found) gives what ``source_trust(depth)`` does;
+    neither or both is refused by name."""
+    from ibr.render.composite import mixed_pixels, source_trust
+
+    z = np.full((8, 10), 4.0, np.float32)
+    z[:, 5:] = 2.0
+    assert np.array_equal(source_trust(z), source_trust(mixed=mixed_pixels(z)))
+    assert (source_trust(z) < 1).sum() == 16
+    for kw in ({}, {"depth": z, "mixed": mixed_pixels(z)}):
+        with pytest.raises(ValueError, match="depth, mixed"):
+            source_trust(**kw)

@@ -169,8 +169,21 @@ def test_bad_input_is_refused_by_name():
         rim_matte(color, depth, Camera(20.0, 20.0, 3.5, 3.5, 8, 8))
     m = rim_matte(color, depth, cam)
     assert isinstance(m, RimMatte)
+    with pytest.raises(ValueError, match="silhouettes"):
+        rim_matte(color, depth, cam, silhouettes=(np.zeros((2, 2), bool), np.zeros((2, 2), bool)))
     with pytest.raises(ValueError, match="layers, mattes, source_shapes"):
         rematte_rims(color, depth, cam, [], [m], [depth.shape])
+    from ibr.render.rasterize import SourceMaps
+
+    maps = SourceMaps(np.zeros(depth.shape, np.float32), np.zeros(depth.shape, np.float32), depth, np.ones(depth.shape, bool))
+    with pytest.raises(ValueError, match="color, depth"):
+        rematte_rims(color[:, :-1], depth, cam, [maps], [m], [depth.shape])
+    with pytest.raises(ValueError, match="camera"):
+        rematte_rims(color, depth, Camera(20.0, 20.0, 3.5, 3.5, 8, 8), [maps], [m], [depth.shape])
+    with pytest.raises(TypeError, match="mattes"):
+        rematte_rims(color, depth, cam, [maps], ["matte"], [depth.shape])
+    out = color.copy()  # a valid call on the view itself: its own background, nothing changes
+    assert rematte_rims(out, depth, cam, [maps], [m], [depth.shape]) == 0 and np.array_equal(out, color)
 
 
 def test_hard_cases_behind_the_camera_wide_fields_and_missing_depth(clutter):

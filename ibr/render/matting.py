@@ -190,6 +190,13 @@ def rematte_rims(color: np.ndarray, depth: np.ndarray, camera: Camera, layers, m
     """
     if len(layers) != len(mattes) or len(mattes) != len(source_shapes) or len(mattes) not in (1, 2):
         raise ValueError("layers, mattes, source_shapes: expected one or two of each, as many of each")
+    if np.ndim(depth) != 2 or np.ndim(color) != 3 or np.shape(color)[:2] != np.shape(depth):
+        raise ValueError(f"color, depth: expected (H, W, C) and (H, W) of one size, got shapes {np.shape(color)} "
+                         f"and {np.shape(depth)}")
+    if not isinstance(camera, Camera) or camera.shape != np.shape(depth):
+        raise ValueError(f"camera: expected a Camera of the depth's shape {np.shape(depth)}")
+    if any(not isinstance(m, RimMatte) for m in mattes):
+        raise TypeError("mattes: expected RimMatte objects (rim_matte)")
     rims = _joined(tuple(mattes))
     h, w = depth.shape
     k, px, b_t = _candidates(rims, color, depth, camera, depth_tol)
