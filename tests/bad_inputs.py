@@ -431,6 +431,10 @@ _add("stereo --max-angle 95", U, "usage", r"argument --max-angle: .*<= 10", argv
      "-o", "{d}/s.png"))
 _add("stereo --mode unknown", U, "usage", r"argument --mode: invalid choice", argv=("stereo", "{d}/a.json", "--mode", "3d",
      "-o", "{d}/s.png"))
+_add("stereo --interpolation cubic", U, "usage", r"argument --interpolation: invalid choice",
+     argv=("stereo", "{d}/a.json", "--interpolation", "cubic", "-o", "{d}/s.png"))
+_add("stereo --interpolation sharp --method mesh", C, "error", r"interpolation: 'sharp' needs method='pixel'",
+     argv=("stereo", "{d}/a.json", "--interpolation", "sharp", "--method", "mesh", "-o", "{d}/s.png"))
 _add("stereo --auto with --e", C, "error", r"--auto: give either --auto or --e/--f", argv=("stereo", "{d}/a.json", "--auto",
      "--e", "0.1", "--f", "2", "-o", "{d}/s.png"))
 _add("stereo --e without --f", C, "error", r"--e: needs --f", argv=("stereo", "{d}/a.json", "--e", "0.1", "-o", "{d}/s.png"))
