@@ -252,7 +252,8 @@ def run_interpolate(args) -> int:
         try:
             for fr in upconvert(iter_views(seq), factor, fill=args.fill, tail=not args.no_tail,
                                 method=args.method, composite_mode=args.composite,
-                                interpolation=args.interpolation, supersample=args.supersample):
+                                interpolation=args.interpolation, supersample=args.supersample,
+                                antialias=args.antialias):
                 r = fr.rendering
                 if fr.index == 0:  # the first key read: now say whether numba compiles (cli.main asked)
                     from commands.interpolate import FRAME_KERNELS

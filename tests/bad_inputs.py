@@ -712,6 +712,11 @@ _lib("write_site into a non-empty folder", "error", r"site: .* is not empty", la
 _lib("write_site force into a non-empty folder (valid)", "ok", "", lambda d: _site(d, force=True))
 _lib("load_view misspelled 'dpeth' (as the CLI)", "error", r"unknown key 'dpeth' \(did you mean 'depth'\?\)",
      lambda d: _load_mutated(d, _rename(("depth",), "dpeth")), issue=True)
+_lib("interpolate antialias 'yes'", "error", r"antialias: expected True or False, got 'yes'",
+     lambda d: _interpolate(d, antialias="yes"), (TypeError,))
+_lib("warp antialias 1", "error", r"antialias: expected True or False, got 1", lambda d: _warp(d, antialias=1), (TypeError,))
+_lib("upconvert antialias None", "error", r"antialias: expected True or False, got None",
+     lambda d: list(_upconvert(d, antialias=None)), (TypeError,))
 
 
 # --------------------------------------------------------------------------- helpers of the library rows
@@ -762,6 +767,27 @@ def _save(d, *, view=None, path="v.json", **kw):
     from ibr.io import save_view
 
     return save_view(_view(d) if view is None else view, d / path, **kw)
+
+
+def _interpolate(d, **kw):
+    from ibr.render.view_synthesis import interpolate
+
+    v = _view(d)
+    return interpolate(v, v, 0.5, **kw)
+
+
+def _warp(d, **kw):
+    from ibr.render.view_synthesis import warp
+
+    v = _view(d)
+    return warp(v, v.camera, **kw)
+
+
+def _upconvert(d, **kw):
+    from ibr.sequence.frame_rate import upconvert
+
+    v = _view(d)
+    return upconvert([v, v], 2, **kw)
 
 
 def _stereo(d, *, e=0.05, f=2.0, method="pixel", **kw):

@@ -217,13 +217,15 @@ def _rasterize_into(mesh, camera: Camera, footprint: str, depth_tol: float, out:
 
 
 def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: float, outs,
-                         crack_rel: float = 0.0, far_coord: np.float32 = _FAR) -> list:
+                         crack_rel: float = 0.0, far_coord: np.float32 = _FAR, setups: list | None = None) -> list:
     """:func:`_rasterize_into` for several meshes into the same camera, their bands of rows run
     in one pass of the band pool (one dispatch, and the pieces of all meshes balance out).
     ``crack_rel`` > 0: one-pixel cracks along rows between same-surface pixels are closed
     (``_raster_kernels.raster_quads``; view synthesis, not the exact coverage of
     :func:`rasterize_mesh`). ``far_coord`` (float32): the map coordinates of uncovered pixels
-    (:data:`_FAR`, off the source, unless the caller reads only covered pixels' maps)."""
+    (:data:`_FAR`, off the source, unless the caller reads only covered pixels' maps).
+    ``setups``: a list that receives each mesh's (quad coefficients, clamp flags) for ``camera``
+    (:func:`ibr.render.edge_antialias.subsample_maps` traces more rays through them)."""
     check_choice("footprint", footprint, FOOTPRINTS)
     depth_tol = check_positive("depth_tol", depth_tol)
     if not isinstance(camera, Camera):
@@ -242,6 +244,8 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
         run_bands(_k.setup_quads, nq, mesh.rects, mesh.inv_depth_planes, _intrinsics(mesh.camera), r, t, kt_inv, kt, w,
                   h, coef, bbox, min_rows=4096)  # quads: a piece per thread from 8192 quads on
         flags = _clamp_flags(mesh, footprint, depth_tol)
+        if setups is not None:
+            setups.append((coef, flags))
         start, order = _k.bucket_bands(bbox, h, _nbands(h))
         qop = mesh.quad_of_pixel if crack_rel > 0 else _NO_QOP
         jobs.append((first, len(start) - 1, (mesh.rects, coef, bbox, flags, w, h, start, order, far_coord,

@@ -129,6 +129,7 @@ def upconvert(
     interpolation: str = "sharp",
     mesh_options: dict | None = None,
     supersample: int = 1,
+    antialias: bool = True,
 ) -> Iterator[SequenceFrame]:
     """Up-convert a sequence of RGB-D key frames by ``factor`` (yields frames in order).
 
@@ -145,7 +146,7 @@ def upconvert(
         background pull-push), the depth-aware background fill of each frame, or nothing.
     tail : bool
         Extrapolate F - 1 frames after the last key (default; keeps the clip's duration).
-    method, composite_mode, interpolation, mesh_options, supersample
+    method, composite_mode, interpolation, mesh_options, supersample, antialias
         As in :func:`ibr.interpolate`.
 
     Yields
@@ -161,9 +162,11 @@ def upconvert(
     factor = _check_factor(factor)
     check_choice("fill", fill, FILLS)
     check_supersample(supersample)
+    if not isinstance(antialias, (bool, np.bool_)):
+        raise TypeError(f"antialias: expected True or False, got {antialias!r}")
     inner_fill = "none" if fill == "previous" else fill
     opts = dict(method=method, composite_mode=composite_mode, interpolation=interpolation,
-                mesh_options=mesh_options, fill=inner_fill, supersample=supersample)
+                mesh_options=mesh_options, fill=inner_fill, supersample=supersample, antialias=bool(antialias))
     it = iter(views)
     try:
         a = next(it)
