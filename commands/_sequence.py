@@ -256,9 +256,10 @@ def run_interpolate(args) -> int:
                                 antialias=args.antialias):
                 r = fr.rendering
                 if fr.index == 0:  # the first key read: now say whether numba compiles (cli.main asked)
-                    from commands.interpolate import FRAME_KERNELS
+                    from commands.interpolate import first_run_kernels
 
-                    note_first_run(*FRAME_KERNELS, warm="frame")
+                    modules, warm = first_run_kernels(args)
+                    note_first_run(*modules, warm=warm)
                 name = f"frame_{fr.index:0{number_width(n_out)}d}"  # sorted by name in order
                 color = (_unit_float(r.color) if args.format == "exr" else _display(r.color))
                 write_image(plan.stage(out, name + ext), color)

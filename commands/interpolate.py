@@ -44,10 +44,10 @@ def add_arguments(parser) -> None:
                         metavar="K",
                         help="K x K subsamples per pixel from sources upsampled with sub-pixel silhouettes, "
                              "box-filtered at depth edges (1, 3 or 5; default 1 = off; about K^2 the frame time)")
-    parser.add_argument("--no-antialias", dest="antialias", action="store_false",
-                        help="leave the silhouettes aliased: by default the pixels at depth edges are the mean of "
-                             "the centre and four diagonal subsamples (+1.4 dB at clutter's edges, about 1.5x the "
-                             "frame time; ibr.render.edge_antialias)")
+    parser.add_argument("--antialias", action="store_true",
+                        help="anti-aliased silhouettes: pixels at depth edges are the mean of their centre and four "
+                             "diagonal subsamples (+1.4 dB at clutter's edges for about 1.5x the frame time; "
+                             "ibr.render.edge_antialias)")
     parser.add_argument("--composite", choices=("blend", "front"), default="blend",
                         help="depth-aware blend (default) or the seed's nearer-source-in-front order")
     parser.add_argument("--format", choices=("png", "exr"), default="png",
@@ -209,13 +209,16 @@ FRAME_PATTERNS = tuple(f"frame_#_t{sign}#.#{tail}" for sign in ("", "-") for tai
 #: The kernel modules an interpolation (and a mesh warp) runs: the segmentation, the rasterizer,
 #: the compositor and the fill (any of them without a fresh numba cache: a first run).
 FRAME_KERNELS = ("ibr.mesh._segment_kernels", "ibr.render._raster_kernels", "ibr.render._composite_kernels",
-                 "ibr.render._edge_kernels", "ibr.render._fill_kernels")
+                 "ibr.render._fill_kernels")
+#: ... and with ``--antialias`` (compiled by the main process: the first-run helper compiling them
+#: too made every first run ~0.9 s longer, #13)
+EDGE_KERNELS = ("ibr.render._edge_kernels",)
 
 
 def first_run_kernels(args):
     """The kernel modules this run compiles and the first-run helper's kind (:func:`cli.main`
     starts the helper with them before the command's imports, #13)."""
-    return FRAME_KERNELS, "frame"
+    return FRAME_KERNELS + (EDGE_KERNELS if getattr(args, "antialias", False) else ()), "frame"
 
 
 def _truth_for_pair(truth, path_a, path_b, ts) -> dict:

@@ -26,10 +26,10 @@ def add_arguments(parser) -> None:
                         metavar="K",
                         help="K x K subsamples per pixel from a source upsampled with sub-pixel silhouettes, "
                              "box-filtered at depth edges (1, 3 or 5; default 1 = off; about K^2 the time)")
-    parser.add_argument("--no-antialias", dest="antialias", action="store_false",
-                        help="leave the silhouettes aliased: by default the pixels at depth edges are the mean of "
-                             "the centre and four diagonal subsamples (+1.4 dB at clutter's edges, about 1.5x the "
-                             "frame time; ibr.render.edge_antialias)")
+    parser.add_argument("--antialias", action="store_true",
+                        help="anti-aliased silhouettes: pixels at depth edges are the mean of their centre and four "
+                             "diagonal subsamples (+1.4 dB at clutter's edges for about 1.5x the frame time; "
+                             "ibr.render.edge_antialias)")
     parser.add_argument("--depth-out", metavar="DEPTH.exr",
                         help="also write the rendered planar depth (.exr, .tif, .pfm)")
     parser.add_argument("--holes-out", metavar="HOLES.png", help="also write the hole mask (before filling; .png, .tif)")
@@ -61,9 +61,9 @@ def first_run_kernels(args):
     splat, no helper); :func:`cli.main` starts the helper with them before the command's imports."""
     if args.method != "mesh":
         return None
-    from commands.interpolate import FRAME_KERNELS
+    from commands.interpolate import first_run_kernels as interpolate_kernels
 
-    return FRAME_KERNELS, "frame"  # interpolate's
+    return interpolate_kernels(args)  # interpolate's
 
 
 def run(args) -> int:

@@ -1,8 +1,5 @@
 """Foreground rim samples re-composited over the target's own background (ibr.render.matting):
-the ghost outlines of issue 11 where only one source sees a silhouette. View synthesis re-mixes
-them in frames that are not anti-aliased (``antialias=False``; with the edge subsamples of
-:mod:`ibr.render.edge_antialias` the band scores higher without the re-mix), so the frames here
-are rendered that way."""
+the ghost outlines of issue 11 where only one source sees a silhouette."""
 
 from __future__ import annotations
 
@@ -79,8 +76,8 @@ def test_the_grey_outline_beside_the_dark_sphere_is_gone(clutter, monkeypatch):
     off the band changes by much."""
     a, b, *truths = clutter
     cams = [g.camera for g in truths]
-    new = vs.interpolate(a, b, cams, fill="none", antialias=False)
-    old = _without_rematte(monkeypatch, lambda: vs.interpolate(a, b, cams, fill="none", antialias=False))
+    new = vs.interpolate(a, b, cams, fill="none")
+    old = _without_rematte(monkeypatch, lambda: vs.interpolate(a, b, cams, fill="none"))
     g = truths[1].color.astype(np.float64)
     col = (slice(80, 106), slice(327, 332))
     err_old = np.abs(old[1].color[col] - g[col]).max(-1)
@@ -144,7 +141,7 @@ def test_the_kernel_matches_its_reference_on_a_real_frame(clutter, monkeypatch):
         return n
 
     monkeypatch.setattr(vs, "rematte_rims", capture)
-    vs.interpolate(a, b, g.camera, fill="none", antialias=False)
+    vs.interpolate(a, b, g.camera, fill="none")
     ref, n_ref = _reference(got["before"], got["depth"], got["camera"], got["layers"], got["mattes"], got["shapes"])
     assert got["n"] >= n_ref > 20  # the kernel counts a pixel twice when two rim pixels reach it
     np.testing.assert_array_equal(got["after"], ref)
@@ -155,8 +152,8 @@ def test_other_colour_types_gain_as_well(clutter, monkeypatch, dtype):
     a, b, _, g, _ = clutter
     scale = 1 / 255 if dtype == np.float32 else 257
     conv = [vs.View((v.color.astype(np.float64) * scale).astype(dtype), v.depth, v.camera, v.name) for v in (a, b)]
-    r_new = vs.interpolate(*conv, g.camera, fill="none", antialias=False)
-    r_old = _without_rematte(monkeypatch, lambda: vs.interpolate(*conv, g.camera, fill="none", antialias=False))
+    r_new = vs.interpolate(*conv, g.camera, fill="none")
+    r_old = _without_rematte(monkeypatch, lambda: vs.interpolate(*conv, g.camera, fill="none"))
     new, old = (r.color.astype(np.float64) / scale for r in (r_new, r_old))
     mask = edge_band(g.depth) & ~r_new.holes
     assert psnr(new, g.color, mask) > psnr(old, g.color, mask) + 0.3
@@ -205,18 +202,18 @@ def test_hard_cases_behind_the_camera_wide_fields_and_missing_depth(clutter):
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
         for cam in (g.camera, wide):
-            r = vs.interpolate(*views, cam, fill="none", antialias=False)
+            r = vs.interpolate(*views, cam, fill="none")
             plain = _without_rematte_plain(views, cam)
             changed = np.any(r.color != plain.color, axis=-1)
             assert not (changed & r.holes).any()
         with pytest.raises(ValueError):  # nothing of the scene in view: the usual error, not ours
-            vs.interpolate(*views, turned, fill="none", antialias=False)
+            vs.interpolate(*views, turned, fill="none")
 
 
 def _without_rematte_plain(views, cam):
     real = vs.rematte_rims
     vs.rematte_rims = lambda *args, **kw: 0
     try:
-        return vs.interpolate(*views, cam, fill="none", antialias=False)
+        return vs.interpolate(*views, cam, fill="none")
     finally:
         vs.rematte_rims = real

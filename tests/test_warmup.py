@@ -1,6 +1,5 @@
-"""The first-run helper (ibr.render.warmup): it compiles the rasterizer, the edge subsamples'
-kernels and the hole fill with the argument types of a real run, so the main process finds them
-in numba's cache."""
+"""The first-run helper (ibr.render.warmup): it compiles the rasterizer and the hole fill with
+the argument types of a real run, so the main process finds them in numba's cache."""
 
 from __future__ import annotations
 
@@ -39,16 +38,16 @@ def _kernels_compiled_by(run: str, env) -> list[str]:
 
 def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
     """With an empty NUMBA_CACHE_DIR the helper writes cache entries for the plane fit, the
-    rasterizer, the edge subsamples and the fill kernels; a real interpolation afterwards compiles none of those (it
+    rasterizer and the fill kernels; a real interpolation afterwards compiles none of those (it
     loads them), only the segmentation's edge prefix and split and the compositor."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PYTHONPATH": str(ROOT)}
     marks = tmp_path / "marks"
     marks.mkdir()
     subprocess.run([sys.executable, "-m", "ibr.render.warmup", "frame", str(marks)], env=env, check=True, timeout=300)
-    assert sorted(p.name for p in marks.iterdir()) == ["edges", "fill", "raster"]  # each group marked once cached
+    assert sorted(p.name for p in marks.iterdir()) == ["fill", "raster"]  # each group marked once cached
     cached = {p.name.split("-")[0] for p in (tmp_path / "nb").rglob("*.nbi")}
     assert {"_raster_kernels._raster_quads", "_raster_kernels._setup_quads", "_fill_kernels.pp_push",
-            "_fill_kernels.axis_background", "_edge_kernels._subsample_quads", "_edge_kernels.average_edges"} <= cached
+            "_fill_kernels.axis_background"} <= cached
     # the segmentation and the plane fit are the main process's (it reaches them first)
     assert not {n for n in cached if n.startswith("_segment_kernels")}
     compiled = _kernels_compiled_by(
@@ -57,7 +56,7 @@ def test_the_helper_fills_the_cache_a_real_run_uses(tmp_path):
         "from samples import DATA_DIR\n"
         "a, b = load_view(DATA_DIR / 'clutter_a.json'), load_view(DATA_DIR / 'clutter_b.json')\n"
         "interpolate(a, b, 0.5, fill='inpaint')\n", env)
-    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_edge_kernels"))]
+    assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels"))]
     # the main process's share: the segmentation's edge prefix, split and plane fit, the compositor
     assert {"_segment_kernels._split_edges_kernel", "_segment_kernels._fit_planes_kernel",
             "_composite_kernels.composite_rgbt"} <= set(compiled)
@@ -365,7 +364,7 @@ def test_the_frame_helper_compiles_at_O2_and_the_frames_do_not_change(tmp_path, 
         out = tmp_path / f"{name}.npz"
         compiled = _kernels_compiled_by(render.replace("sys.argv[1]", repr(str(out))), env)
         if helper_opt:  # the render loaded the helper's -O2 kernels (it compiled none of them)
-            assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels", "_edge_kernels"))]
+            assert not [k for k in compiled if k.startswith(("_raster_kernels", "_fill_kernels"))]
         outs.append(np.load(out))
     assert np.array_equal(outs[0]["c"], outs[1]["c"])
     assert np.array_equal(outs[0]["z"], outs[1]["z"], equal_nan=True)

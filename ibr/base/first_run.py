@@ -26,7 +26,7 @@ __all__ = ["GROUPS", "HELPER_OPT", "MAX_WAIT_S", "await_kernels", "mark", "start
 
 _STARTED: list = []  # (helper process, marker directory, groups it marks, owner pid) once started
 #: The kernel groups each kind of helper marks (a group of the other kind is not waited for).
-GROUPS = {"frame": ("raster", "edges", "fill"),
+GROUPS = {"frame": ("raster", "fill"),
           "stitch": ("ray-setup", "plane-fit", "blend", "background-fill"),
           "stitch-ods": ("ray-setup", "plane-fit", "blend", "row-fill"),
           "mesh": ("segment", "plane-fit")}

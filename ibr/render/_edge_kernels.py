@@ -92,6 +92,12 @@ def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects
 subsample_quads = njit(cache=True, error_model="numpy", nogil=True)(_subsample_quads)
 
 
+#: Weight of an edge pixel's centre in its mean (each subsample counts once): a tent rather than a
+#: box over the pixel. Measured (bench_edges, clutter / room edge band, dB): 1: 29.87 / 31.28,
+#: 2: 29.90 / 31.34, 3: 29.84 / 31.35, 4: 29.74 / 31.34.
+CENTRE_WEIGHT = 2.0
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, rel, rounded, edge):
     """Box-filter the edge pixels among ``ys, xs`` (covered) in place (see
@@ -101,7 +107,7 @@ def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, rel,
     m = sub_depth.shape[0]
     vals = np.empty(m + 1, np.float64)
     acc = np.empty(nch, np.float64)
-    norm = 1.0 / (m + 1)
+    norm = 1.0 / (m + CENTRE_WEIGHT)
     for i in range(ys.shape[0]):
         y, x = ys[i], xs[i]
         vals[0] = 1.0 / depth[y, x]
@@ -124,8 +130,8 @@ def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, rel,
         edge[i] = e
         if not e:
             continue
-        for c in range(nch):  # the pixel itself, once for its centre and once per uncovered subsample
-            acc[c] = color[y, x, c] * (m + 2 - nf)
+        for c in range(nch):  # the pixel itself: its centre, and each uncovered subsample
+            acc[c] = color[y, x, c] * (CENTRE_WEIGHT + m + 1 - nf)
         for s in range(m):
             if sub_coverage[s, i]:
                 for c in range(nch):

@@ -1,4 +1,4 @@
-"""Anti-aliased silhouettes at about 1.5x the frame: subsamples at the target's depth edges only (#11).
+"""Anti-aliased silhouettes at about 1.5x the frame (``antialias=True``): subsamples at the target's depth edges only (#11).
 
 A camera integrates each pixel over its area, so the truth's silhouette pixels mix the surfaces
 on both sides of an edge; a renderer that traces each target pixel's *centre* gives such a pixel
@@ -10,7 +10,7 @@ the quads that cover the pixel or one of its eight neighbours at their centres
 (:func:`subsample_maps`; a quad that covers none of those nine centres is missed, as the frame
 misses it), the subsamples are composited as the frame's pixels are (trust, blend, z-test), and
 a pixel whose subsamples lie on two surfaces, or are partly uncovered, takes the mean of them
-and its own colour (:func:`average_edge_pixels`).
+and its own colour (counted twice: a tent over the pixel) (:func:`average_edge_pixels`).
 
 At a source's own pose every subsample lies in its pixel's own quad, so a source comes back
 unchanged. Measured (``python benchmarks/bench_edges.py --quick``, t = .25/.5/.75, covered
@@ -33,7 +33,6 @@ from .rasterize import SourceMaps, _clamp_flags, _intrinsics, src_from_tgt
 from .bands import run_bands
 from ._raster_kernels import setup_quads
 from ..base.camera import Camera
-from ..base.first_run import await_kernels
 from ..base.validate import check_array, check_finite_scalar, check_positive
 
 __all__ = ["SUBSAMPLE_OFFSETS", "average_edge_pixels", "edge_candidates", "subsample_maps", "unpack_subsamples"]
@@ -109,7 +108,6 @@ def subsample_maps(mesh, camera: Camera, maps: SourceMaps, ys, xs, *, footprint:
     flat[0][m * n:] = flat[1][m * n:] = far_coord
     if n:
         coef, flags = quads if quads is not None else _quad_setup(mesh, camera, footprint)
-        await_kernels("edges")  # a first run: the helper may be caching these kernels right now
         run_bands(_k.subsample_quads, n, xs, ys, SUBSAMPLE_OFFSETS, maps.map_u, maps.map_v, maps.coverage, mesh.quad_of_pixel, mesh.rects, coef,
                   flags, np.float32(far_coord), *[a[:m * n].reshape(m, n) for a in flat], min_rows=1024)
     return SourceMaps(*[a.reshape(-1, w) for a in flat])
@@ -148,8 +146,9 @@ def average_edge_pixels(color: np.ndarray, depth: np.ndarray, ys, xs, sub_color:
     depth_tol : float
         An edge pixel has subsamples on two surfaces (sorted by inverse depth, two neighbours more
         than ``depth_tol`` apart: a step, not the slope of a grazing plane) or uncovered ones. It
-        takes the mean of its centre and subsamples, an uncovered subsample standing for the
-        pixel itself (not for the hole's fill: the same frame with or without a fill).
+        takes the weighted mean of its centre (twice, ``_edge_kernels.CENTRE_WEIGHT``) and
+        subsamples, an uncovered subsample standing for the pixel itself (not for the hole's
+        fill: the same frame with or without a fill).
     """
     depth = check_array("depth", depth, ndim=2, dtype_kind="f")
     if not isinstance(color, np.ndarray) or color.ndim != 3 or color.shape[:2] != depth.shape:

@@ -624,7 +624,7 @@ def warp(
     mesh_options: dict | None = None,
     lod: str = "move",
     supersample: int = 1,
-    antialias: bool = True,
+    antialias: bool = False,
 ) -> Rendering:
     """Render one RGB-D view from another camera.
 
@@ -665,9 +665,11 @@ def warp(
         depth edges (:mod:`ibr.render.supersample`): anti-aliased, sub-pixel silhouettes, about
         k^2 the time (and a mesh of k^2 the pixels, once per source). 1: off (default).
     antialias : bool
-        Anti-aliased silhouettes (default): each covered pixel at a depth edge is the mean of
-        its centre and four diagonal subsamples (:mod:`ibr.render.edge_antialias`; about 1.5x
-        the frame). Not with ``supersample`` > 1, which subsamples every pixel.
+        Anti-aliased silhouettes: each covered pixel at a depth edge is the mean of its centre
+        (twice) and four diagonal subsamples (:mod:`ibr.render.edge_antialias`): about 1.5x the
+        frame and a first run ~1 s longer (its kernels compile), so an option, the cheap middle
+        between the default and ``supersample=3``. Not with ``supersample`` > 1, which
+        subsamples every pixel. False: off (default).
 
     Returns
     -------
@@ -740,7 +742,7 @@ def iter_interpolate(
     lod: str = "move",
     silhouettes: bool = True,
     supersample: int = 1,
-    antialias: bool = True,
+    antialias: bool = False,
 ) -> Iterator[Rendering]:
     """Generator form of :func:`interpolate`: yields one :class:`Rendering` per target, in order
     (the previous-frame fill uses the frame yielded before). Every argument is checked when it is
@@ -817,7 +819,7 @@ def interpolate(
     lod: str = "move",
     silhouettes: bool = True,
     supersample: int = 1,
-    antialias: bool = True,
+    antialias: bool = False,
 ) -> "Rendering | list[Rendering]":
     """Views between two RGB-D sources (seed 002: inverse warping + two-source hole filling).
 
@@ -857,9 +859,10 @@ def interpolate(
         pixel box-filtered at depth edges; about k^2 the frame time (the fill and the
         previous-frame fill run on the subsamples). 1: off (default).
     antialias : bool
-        As in :func:`warp` (default True): depth-edge pixels the mean of five subsamples. The
-        foreground rims of :mod:`ibr.render.matting` are re-mixed only in frames that are not
-        anti-aliased (with the subsamples the re-mix lowered clutter's edge band, 29.87 -> 29.77 dB).
+        As in :func:`warp`: depth-edge pixels the mean of their centre and four subsamples
+        (default False). The foreground rims of :mod:`ibr.render.matting` are re-mixed only in
+        frames that are not anti-aliased (with the subsamples the re-mix lowered clutter's edge
+        band, 29.87 -> 29.77 dB).
 
     Returns
     -------

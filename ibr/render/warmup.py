@@ -42,9 +42,8 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     """Call the rasterizer and the hole fill once on a tiny scene (types as in a real run), in
     the order the main process will need them after its own segmentation kernels and plane fit
     (the rasterizer with its crack closing is the longest compile of the first run: the main
-    process, waiting for it, compiles the plane fit itself), then the edge subsamples' kernels;
-    mark groups "raster", "edges" and "fill" (the directional fill and the pull-push) in the
-    directory ``marks`` as they land in the cache.
+    process, waiting for it, compiles the plane fit itself); mark groups "raster" and "fill" (the
+    directional fill and the pull-push) in the directory ``marks`` as they land in the cache.
     :func:`ibr.base.first_run.start_helper` runs this process with LLVM at -O2
     (:data:`ibr.base.first_run.HELPER_OPT`)."""
     from ..base.camera import Camera
@@ -56,11 +55,8 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     moved = Camera(30.0, 30.0, (w - 1) / 2, (h - 1) / 2, w, h,
                    np.array([[1, 0, 0, 0.3], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]]))
     # as view synthesis rasterizes: with its crack closing
-    maps = _rasterize_many_into([mesh], moved, "free", 0.01, [scratch_maps("warm", moved.shape)],
-                                crack_rel=CRACK_REL)[0]
+    _rasterize_many_into([mesh], moved, "free", 0.01, [scratch_maps("warm", moved.shape)], crack_rel=CRACK_REL)
     _mark(marks, "raster")
-    _warm_edges(mesh, moved, maps)
-    _mark(marks, "edges")
     color = np.full((h, w, 3), 128, np.uint8)
     depth = np.full((h, w), 3.0, np.float32)
     holes = np.zeros((h, w), np.bool_)
@@ -68,22 +64,6 @@ def warm_frame_kernels(marks: Path | None = None) -> None:
     depth[holes] = np.nan
     fill._fill_pullpush_inplace(color, depth, holes, axis=0)
     _mark(marks, "fill")
-
-
-def _warm_edges(mesh, camera, maps) -> None:
-    """The edge subsamples' kernels (:mod:`ibr.render.edge_antialias`) on the tiny scene's step,
-    with the argument types of a real frame."""
-    from .edge_antialias import SUBSAMPLE_OFFSETS, average_edge_pixels, edge_candidates, subsample_maps, \
-        unpack_subsamples
-
-    color = np.full((*camera.shape, 3), 128, np.uint8)
-    ys, xs = edge_candidates(maps.depth, color)
-    n = len(ys)
-    sub = subsample_maps(mesh, camera, maps, ys, xs)
-    sub_color = unpack_subsamples(np.zeros((*sub.depth.shape, 3), np.uint8), n)
-    average_edge_pixels(color, np.ascontiguousarray(maps.depth), ys, xs, sub_color, unpack_subsamples(sub.depth, n),
-                        unpack_subsamples(sub.coverage, n))
-    assert len(SUBSAMPLE_OFFSETS) and n  # the step is in view: the kernels ran
 
 
 def _tiny_mesh():

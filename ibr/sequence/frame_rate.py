@@ -129,7 +129,7 @@ def upconvert(
     interpolation: str = "sharp",
     mesh_options: dict | None = None,
     supersample: int = 1,
-    antialias: bool = True,
+    antialias: bool = False,
 ) -> Iterator[SequenceFrame]:
     """Up-convert a sequence of RGB-D key frames by ``factor`` (yields frames in order).
 
