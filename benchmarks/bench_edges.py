@@ -319,7 +319,7 @@ def pictures(r0, old_c, new_c, out_dir: Path):
     a, b, truths = load_pair("clutter")
     g = truths[-1]
     crops = [g.color]
-    for kw in (BEFORE, AFTER, SUPERSAMPLED):
+    for kw in (BEFORE, AFTER, ANTIALIASED, SUPERSAMPLED):
         crops.append(interpolate(a, b, g.camera, fill="inpaint", **kw).color)
     ys, xs = slice(30, 150), slice(180, 300)
     row = np.concatenate([c[ys, xs] for c in crops], 1)
