@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import ibr.render.view_synthesis as vs
 from ibr.base.camera import Camera
@@ -75,7 +77,8 @@ def test_subsample_maps_are_the_frame_moved_by_the_subsample_offset(clutter):
     maps = rasterize_mesh(mesh, cam)
     ys, xs = edge_candidates(maps.depth, np.zeros(cam.shape, np.uint8))
     assert len(ys) > 1000
-    sub = subsample_maps(mesh, cam, maps, ys, xs, far_coord=-7.0)
+    sub, same = subsample_maps(mesh, cam, maps, ys, xs, far_coord=-7.0)
+    assert 0.2 < same.mean() < 0.9  # most subsamples of edge pixels lie on their centre's quad
     n = len(ys)
     agree = total = 0
     for s, (du, dv) in enumerate(SUBSAMPLE_OFFSETS):
@@ -94,11 +97,12 @@ def test_subsample_maps_are_the_frame_moved_by_the_subsample_offset(clutter):
     assert agree > 0.99 * total, (agree, total)  # measured 99.3 %
 
 
-def _reference_average(color, depth, ys, xs, sub_color, sub_depth, sub_cov, tol):
+def _reference_average(color, depth, ys, xs, sub_color, sub_depth, sub_cov, sub_same, tol):
     out = color.astype(np.float64)
     for i, (y, x) in enumerate(zip(ys, xs)):
-        q = sorted([1 / depth[y, x]] + [1 / sub_depth[s, i] for s in range(len(sub_depth)) if sub_cov[s, i]])
-        edge = len(q) < len(sub_depth) + 1 or any(q[j] > q[j - 1] * (1 + tol) for j in range(1, len(q)))
+        others = [s for s in range(len(sub_depth)) if not sub_same[s, i]]  # not on the centre's quads
+        q = sorted([1 / depth[y, x]] + [1 / sub_depth[s, i] for s in others if sub_cov[s, i]])
+        edge = any(not sub_cov[s, i] for s in others) or any(q[j] > q[j - 1] * (1 + tol) for j in range(1, len(q)))
         if edge:
             samples = [color[y, x]] * 2 + [sub_color[s, i] if sub_cov[s, i] else color[y, x] for s in range(len(sub_depth))]
             out[y, x] = np.mean(np.asarray(samples, np.float64), 0)
@@ -108,7 +112,7 @@ def _reference_average(color, depth, ys, xs, sub_color, sub_depth, sub_cov, tol)
 @pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32])
 def test_averaging_matches_a_plain_python_reference(dtype):
     rng = np.random.default_rng(3)
-    h, w, n, m = 12, 14, 40, len(SUBSAMPLE_OFFSETS)
+    h, w, n, m = 12, 14, 60, len(SUBSAMPLE_OFFSETS)
     top = 255 if dtype == np.uint8 else (65535 if dtype == np.uint16 else 1.0)
     color = (rng.random((h, w, 3)) * top).astype(dtype)
     depth = rng.uniform(1, 3, (h, w)).astype(np.float32)
@@ -120,14 +124,17 @@ def test_averaging_matches_a_plain_python_reference(dtype):
                          base * rng.uniform(1.01, 1.3, (m, n))).astype(np.float32)  # same surface or another
     sub_cov = rng.random((m, n)) > 0.15
     sub_depth[~sub_cov] = np.nan
-    ref = _reference_average(color, depth, ys, xs, sub_color, sub_depth, sub_cov, 0.02)
-    got = color.copy()
-    count = average_edge_pixels(got, depth, ys, xs, sub_color, sub_depth, sub_cov, 0.02)
-    assert 5 < count < n
-    if dtype == np.float32:
-        np.testing.assert_allclose(got, ref, rtol=1e-5)
-    else:
-        np.testing.assert_array_equal(got, np.floor(ref + 0.5).astype(dtype))
+    sub_same = rng.random((m, n)) < 0.3
+    for same in (None, sub_same):
+        ref = _reference_average(color, depth, ys, xs, sub_color, sub_depth, sub_cov,
+                                 np.zeros((m, n), bool) if same is None else same, 0.02)
+        got = color.copy()
+        count = average_edge_pixels(got, depth, ys, xs, sub_color, sub_depth, sub_cov, same, 0.02)
+        assert 5 < count < n
+        if dtype == np.float32:
+            np.testing.assert_allclose(got, ref, rtol=1e-5)
+        else:
+            np.testing.assert_array_equal(got, np.floor(ref + 0.5).astype(dtype))
 
 
 def test_candidates_need_a_step_or_a_hole_and_colours_that_differ():
@@ -213,6 +220,9 @@ def test_bad_input_is_refused_by_name(clutter):
     with pytest.raises(ValueError, match="xs"):
         subsample_maps(mesh, a.camera, maps, [1], [1.5])
     m = len(SUBSAMPLE_OFFSETS)
+    with pytest.raises(ValueError, match="sub_same"):
+        average_edge_pixels(c.copy(), z, [1], [1], np.zeros((m, 1, 3), np.uint8), np.ones((m, 1), np.float32),
+                            np.ones((m, 1), bool), np.ones((m, 2), bool))
     with pytest.raises(ValueError, match="sub_color, sub_depth, sub_coverage"):
         average_edge_pixels(c.copy(), z, [1], [1], np.zeros((m, 2, 3), np.uint8), np.ones((m, 1), np.float32),
                             np.ones((m, 1), bool))
@@ -243,3 +253,18 @@ def test_cli_interpolate_and_warp_take_antialias(tmp_path, capsys):
                          "-o", str(out), *flag]) == 0
         warped[flag] = float(re.search(r"PSNR over covered pixels ([0-9.]+) dB", capsys.readouterr().err).group(1))
     assert warped[("--antialias",)] > warped[()] + 0.3, warped
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.sampled_from([np.uint8, np.float32]))
+def test_random_step_scenes_come_back_unchanged_at_their_own_pose(seed, dtype):
+    """Random blocks of depth (steps of any size, NaN holes) and colour: every pixel a source
+    covers at its own pose keeps its value with the edge subsamples on."""
+    rng = np.random.default_rng(seed)
+    h, w = 24, 32
+    depth = np.kron(rng.uniform(0.5, 20.0, (h // 4, w // 4)), np.ones((4, 4))).astype(np.float32)
+    depth[rng.random((h, w)) < 0.03] = np.nan
+    color = (rng.random((h, w, 3)) * (255 if dtype == np.uint8 else 1.0)).astype(dtype)
+    v = View(color, depth, Camera(25.0, 25.0, (w - 1) / 2, (h - 1) / 2, w, h), "steps")
+    r = vs.warp(v, v.camera, fill="none", antialias=True)
+    np.testing.assert_array_equal(r.color[~r.holes], color[~r.holes])

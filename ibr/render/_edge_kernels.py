@@ -16,19 +16,25 @@ __all__: list[str] = []
 
 
 def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects, coef, clamp, far_coord,
-                     out_u, out_v, out_z, out_c):
+                     out_u, out_v, out_z, out_c, out_same):
     """Source coordinates and depth of the subsamples ``(xs[i] + offsets[s, 0], ys[i] +
     offsets[s, 1])`` of target pixels ``i0 .. i1-1``, z-buffered over the quads that cover the
     pixel or one of its eight neighbours at their centres (``map_u``, ``map_v``, ``coverage``:
     the source's rasterized maps; ``qop``: the source mesh's quad of each source pixel). Writes
-    ``out_*[s, i]`` (m, n); ``far_coord`` and NaN depth where no quad covers a subsample."""
+    ``out_*[s, i]`` (m, n); ``far_coord`` and NaN depth where no quad covers a subsample;
+    ``out_same``: the subsample lies on the quad of the pixel's centre (or both are uncovered)."""
     h, w = coverage.shape
     hs, ws = qop.shape
     m = offsets.shape[0]
     cand = np.empty(9, np.int64)
     best = np.empty(m, np.float64)
+    won = np.empty(m, np.int64)  # the quad each subsample found
     for i in range(i0, i1):
         x, y = xs[i], ys[i]
+        centre = -1
+        if coverage[y, x]:
+            centre = qop[min(max(int(np.floor(map_v[y, x] + 0.5)), 0), hs - 1),
+                         min(max(int(np.floor(map_u[y, x] + 0.5)), 0), ws - 1)]
         nc = 0
         for yy in range(max(y - 1, 0), min(y + 2, h)):
             for xx in range(max(x - 1, 0), min(x + 2, w)):
@@ -46,6 +52,7 @@ def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects
                     nc += 1
         for s in range(m):
             best[s] = 0.0
+            won[s] = -1
             out_u[s, i] = far_coord
             out_v[s, i] = far_coord
         for j in range(nc):
@@ -79,12 +86,14 @@ def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects
                 if clamp[q, 3] != 0 and vs > ev1 - 0.5:
                     vs = ev1 - 0.5
                 best[s] = iz
+                won[s] = q
                 out_u[s, i] = us
                 out_v[s, i] = vs
         for s in range(m):
             b = best[s]
             out_c[s, i] = b > 0.0
             out_z[s, i] = 1.0 / b if b > 0.0 else np.nan
+            out_same[s, i] = won[s] == centre
 
 
 #: Candidates ``i0 .. i1-1`` without the GIL (:func:`ibr.render.bands.run_bands` splits them
@@ -99,9 +108,10 @@ CENTRE_WEIGHT = 2.0
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, rel, rounded, edge):
+def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, sub_same, rel, rounded, edge):
     """Box-filter the edge pixels among ``ys, xs`` (covered) in place (see
-    :func:`ibr.render.edge_antialias.average_edge_pixels`; ``rounded``: integer colour); sets
+    :func:`ibr.render.edge_antialias.average_edge_pixels`; ``sub_same``: subsamples on the
+    centre's own quads, left out of the edge test; ``rounded``: integer colour); sets
     ``edge[i]`` for the pixels changed."""
     nch = color.shape[2]
     m = sub_depth.shape[0]
@@ -112,10 +122,18 @@ def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, rel,
         y, x = ys[i], xs[i]
         vals[0] = 1.0 / depth[y, x]
         nf = 1
+        e = False
+        uncovered = 0
         for s in range(m):
+            if not sub_coverage[s, i]:
+                uncovered += 1
+            if sub_same[s, i]:
+                continue
             if sub_coverage[s, i]:
                 vals[nf] = 1.0 / sub_depth[s, i]
                 nf += 1
+            else:
+                e = True  # covered and uncovered subsamples
         for j in range(1, nf):  # insertion sort of at most m + 1 values
             v = vals[j]
             k = j - 1
@@ -123,7 +141,6 @@ def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, rel,
                 vals[k + 1] = vals[k]
                 k -= 1
             vals[k + 1] = v
-        e = nf < m + 1
         for j in range(1, nf):
             if vals[j] > vals[j - 1] * (1.0 + rel):
                 e = True
@@ -131,7 +148,7 @@ def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, rel,
         if not e:
             continue
         for c in range(nch):  # the pixel itself: its centre, and each uncovered subsample
-            acc[c] = color[y, x, c] * (CENTRE_WEIGHT + m + 1 - nf)
+            acc[c] = color[y, x, c] * (CENTRE_WEIGHT + uncovered)
         for s in range(m):
             if sub_coverage[s, i]:
                 for c in range(nch):

@@ -81,17 +81,18 @@ def edge_candidates(depth: np.ndarray, color: np.ndarray, *, depth_tol: float = 
 
 
 def subsample_maps(mesh, camera: Camera, maps: SourceMaps, ys, xs, *, footprint: str = "free",
-                   far_coord=np.float32(0.0), quads=None) -> SourceMaps:
+                   far_coord=np.float32(0.0), quads=None) -> tuple[SourceMaps, np.ndarray]:
     """Where the :data:`SUBSAMPLE_OFFSETS` subsamples of target pixels (``ys``, ``xs``) sample
     the source of ``mesh``, from the source's rasterized ``maps`` in ``camera`` (the frame's;
     quads are looked for among those covering the pixel or a neighbour at its centre).
 
-    The result is an image of subsamples, rows of ``camera``'s width (so that it is composited
-    like a frame, in the frame's work arrays): entry ``s n + i`` in row-major order is
-    subsample s of pixel i, the rest is padding (uncovered); :func:`unpack_subsamples` gives
-    the (m, n) view. Uncovered subsamples have NaN depth and ``far_coord`` map coordinates.
-    ``quads``: the (coefficients, clamp flags) of the rasterizer's set-up of ``mesh`` for
-    ``camera``, if at hand."""
+    Returns the maps and ``same``, (m, n) bool: the subsample lies on the quad of its pixel's
+    centre (or neither is covered). The maps are an image of subsamples, rows of ``camera``'s
+    width (so that it is composited like a frame, in the frame's work arrays): entry ``s n + i``
+    in row-major order is subsample s of pixel i, the rest is padding (uncovered);
+    :func:`unpack_subsamples` gives the (m, n) view. Uncovered subsamples have NaN depth and
+    ``far_coord`` map coordinates. ``quads``: the (coefficients, clamp flags) of the
+    rasterizer's set-up of ``mesh`` for ``camera``, if at hand."""
     from ..mesh.quad_mesh import QuadMesh
 
     if not isinstance(mesh, QuadMesh):
@@ -106,11 +107,13 @@ def subsample_maps(mesh, camera: Camera, maps: SourceMaps, ys, xs, *, footprint:
     flat = [np.empty(size, np.float32), np.empty(size, np.float32), np.full(size, np.nan, np.float32),
             np.zeros(size, np.bool_)]
     flat[0][m * n:] = flat[1][m * n:] = far_coord
+    same = np.ones((m, n), np.bool_)
     if n:
         coef, flags = quads if quads is not None else _quad_setup(mesh, camera, footprint)
-        run_bands(_k.subsample_quads, n, xs, ys, SUBSAMPLE_OFFSETS, maps.map_u, maps.map_v, maps.coverage, mesh.quad_of_pixel, mesh.rects, coef,
-                  flags, np.float32(far_coord), *[a[:m * n].reshape(m, n) for a in flat], min_rows=1024)
-    return SourceMaps(*[a.reshape(-1, w) for a in flat])
+        run_bands(_k.subsample_quads, n, xs, ys, SUBSAMPLE_OFFSETS, maps.map_u, maps.map_v, maps.coverage,
+                  mesh.quad_of_pixel, mesh.rects, coef, flags, np.float32(far_coord),
+                  *[a[:m * n].reshape(m, n) for a in flat], same, min_rows=1024)
+    return SourceMaps(*[a.reshape(-1, w) for a in flat]), same
 
 
 def unpack_subsamples(a: np.ndarray, n: int) -> np.ndarray:
@@ -132,7 +135,7 @@ def _quad_setup(mesh, camera: Camera, footprint: str):
 
 
 def average_edge_pixels(color: np.ndarray, depth: np.ndarray, ys, xs, sub_color: np.ndarray, sub_depth: np.ndarray,
-                        sub_coverage: np.ndarray, depth_tol: float = 0.02) -> int:
+                        sub_coverage: np.ndarray, sub_same: np.ndarray | None = None, depth_tol: float = 0.02) -> int:
     """Box-filter the edge pixels among (``ys``, ``xs``) in place and return how many there were.
 
     Parameters
@@ -143,6 +146,11 @@ def average_edge_pixels(color: np.ndarray, depth: np.ndarray, ys, xs, sub_color:
         Covered candidate pixels (:func:`edge_candidates`).
     sub_color, sub_depth, sub_coverage : (m, n, C), (m, n), (m, n) arrays
         Their composited :data:`SUBSAMPLE_OFFSETS` subsamples (as :func:`subsample_maps` lays them out).
+    sub_same : (m, n) bool array, optional
+        Subsamples on the quads of their pixel's centre in every source (``subsample_maps``'
+        ``same``): one surface with the centre whatever its slope, left out of the edge test
+        (a steep plane's depth changes by several % within a pixel; a source then comes back
+        unchanged at its own pose). None: none is.
     depth_tol : float
         An edge pixel has subsamples on two surfaces (sorted by inverse depth, two neighbours more
         than ``depth_tol`` apart: a step, not the slope of a grazing plane) or uncovered ones. It
@@ -159,10 +167,15 @@ def average_edge_pixels(color: np.ndarray, depth: np.ndarray, ys, xs, sub_color:
         raise ValueError(f"sub_color, sub_depth, sub_coverage: expected shapes {(m, n, color.shape[2])}, {(m, n)}, "
                          f"{(m, n)} (the subsamples of the {n} pixels), got {np.shape(sub_color)}, "
                          f"{np.shape(sub_depth)}, {np.shape(sub_coverage)}")
+    if sub_same is None:
+        sub_same = np.zeros((m, n), np.bool_)
+    elif np.shape(sub_same) != (m, n):
+        raise ValueError(f"sub_same: expected shape {(m, n)}, got {np.shape(sub_same)}")
     depth_tol = check_positive("depth_tol", depth_tol)
     edge = np.zeros(n, np.bool_)
     if n:
-        _k.average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, float(depth_tol), np.issubdtype(color.dtype, np.integer),
+        _k.average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage,
+                         np.ascontiguousarray(sub_same, np.bool_), float(depth_tol), np.issubdtype(color.dtype, np.integer),
                          edge)
     return int(edge.sum())
 

@@ -15,6 +15,7 @@ output colors keep the sources' dtype (uint8 in, uint8 out, rounded to nearest).
 
 from __future__ import annotations
 
+import functools
 import weakref
 from dataclasses import dataclass
 from typing import Iterator, Sequence
@@ -422,6 +423,7 @@ class _EdgeSubsamples:
     ys: np.ndarray
     xs: np.ndarray
     sub: Composite
+    same: np.ndarray
 
 
 def _edge_subsamples(views, maps, setups, camera, weights, comp, footprint, composite_options) -> _EdgeSubsamples:
@@ -432,11 +434,13 @@ def _edge_subsamples(views, maps, setups, camera, weights, comp, footprint, comp
     ys, xs = edge_candidates(comp.depth, comp.color, depth_tol=EDGE_DEPTH_TOL,
                              contrast=EDGE_CONTRAST * _full_scale(comp.color.dtype), exclude=exclude)
     meshes = [source_mesh(v, **o) for v, o in zip(views, composite_options["mesh_options"])]
-    sub_maps = [subsample_maps(mesh, camera, m, ys, xs, footprint=footprint, far_coord=_UNCOVERED_COORD, quads=q)
-                for mesh, m, q in zip(meshes, maps, setups)]
-    sub = _composite_maps(views, sub_maps, weights, slots=("edge a", "edge b"), **composite_options)
+    traced = [subsample_maps(mesh, camera, m, ys, xs, footprint=footprint, far_coord=_UNCOVERED_COORD, quads=q)
+              for mesh, m, q in zip(meshes, maps, setups)]
+    sub = _composite_maps(views, [t[0] for t in traced], weights, slots=("edge a", "edge b"), **composite_options)
+    same = functools.reduce(np.logical_and, [t[1] for t in traced])  # on the centre's quads in every source
     n = len(ys)
-    return _EdgeSubsamples(ys, xs, Composite(*[unpack_subsamples(a, n) for a in (sub.color, sub.depth, sub.coverage)]))
+    return _EdgeSubsamples(ys, xs, Composite(*[unpack_subsamples(a, n) for a in (sub.color, sub.depth, sub.coverage)]),
+                           same)
 
 
 def _antialias(r: "Rendering", edges: "_EdgeSubsamples | None") -> "Rendering":
@@ -445,7 +449,7 @@ def _antialias(r: "Rendering", edges: "_EdgeSubsamples | None") -> "Rendering":
         color = r.color if r.color.ndim == 3 else r.color[..., None]
         sub_color = edges.sub.color if edges.sub.color.ndim == 3 else edges.sub.color[..., None]
         average_edge_pixels(color, r.depth, edges.ys, edges.xs, sub_color, edges.sub.depth,
-                            edges.sub.coverage, EDGE_DEPTH_TOL)
+                            edges.sub.coverage, edges.same, EDGE_DEPTH_TOL)
     return r
 
 
