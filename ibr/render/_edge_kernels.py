@@ -109,7 +109,7 @@ CENTRE_WEIGHT = 2.0
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage, sub_same, rel, rounded, edge):
-    """Box-filter the edge pixels among ``ys, xs`` (covered) in place (see
+    """Filter the edge pixels among ``ys, xs`` (covered) over their subsamples in place (see
     :func:`ibr.render.edge_antialias.average_edge_pixels`; ``sub_same``: subsamples on the
     centre's own quads, left out of the edge test; ``rounded``: integer colour); sets
     ``edge[i]`` for the pixels changed."""

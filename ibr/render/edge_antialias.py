@@ -1,4 +1,4 @@
-"""Anti-aliased silhouettes at about 1.5x the frame (``antialias=True``): subsamples at the target's depth edges only (#11).
+"""Anti-aliased silhouettes from subsamples of the depth-edge pixels only (``antialias=True``, #11).
 
 A camera integrates each pixel over its area, so the truth's silhouette pixels mix the surfaces
 on both sides of an edge; a renderer that traces each target pixel's *centre* gives such a pixel
@@ -29,9 +29,8 @@ import cv2
 import numpy as np
 
 from . import _edge_kernels as _k
-from .rasterize import SourceMaps, _clamp_flags, _intrinsics, src_from_tgt
+from .rasterize import SourceMaps, quad_setup
 from .bands import run_bands
-from ._raster_kernels import setup_quads
 from ..base.camera import Camera
 from ..base.validate import check_array, check_finite_scalar, check_positive
 
@@ -109,7 +108,10 @@ def subsample_maps(mesh, camera: Camera, maps: SourceMaps, ys, xs, *, footprint:
     flat[0][m * n:] = flat[1][m * n:] = far_coord
     same = np.ones((m, n), np.bool_)
     if n:
-        coef, flags = quads if quads is not None else _quad_setup(mesh, camera, footprint)
+        if quads is None:
+            coef, _, flags = quad_setup(mesh, camera, footprint, 0.01)
+        else:
+            coef, flags = quads
         run_bands(_k.subsample_quads, n, xs, ys, SUBSAMPLE_OFFSETS, maps.map_u, maps.map_v, maps.coverage,
                   mesh.quad_of_pixel, mesh.rects, coef, flags, np.float32(far_coord),
                   *[a[:m * n].reshape(m, n) for a in flat], same, min_rows=1024)
@@ -123,20 +125,10 @@ def unpack_subsamples(a: np.ndarray, n: int) -> np.ndarray:
     return a.reshape(-1, *a.shape[2:])[:m * n].reshape(m, n, *a.shape[2:])
 
 
-def _quad_setup(mesh, camera: Camera, footprint: str):
-    """(coefficients, clamp flags) of ``mesh``'s quads in ``camera`` as the rasterizer sets them up."""
-    r, t = src_from_tgt(mesh.camera, camera)
-    nq = len(mesh.rects)
-    coef = np.empty((nq, 12), np.float64)
-    bbox = np.empty((nq, 4), np.int32)
-    run_bands(setup_quads, nq, mesh.rects, mesh.inv_depth_planes, _intrinsics(mesh.camera), r, t,
-              np.linalg.inv(camera.K), _intrinsics(camera), camera.width, camera.height, coef, bbox, min_rows=4096)
-    return coef, _clamp_flags(mesh, footprint, 0.01)
-
-
 def average_edge_pixels(color: np.ndarray, depth: np.ndarray, ys, xs, sub_color: np.ndarray, sub_depth: np.ndarray,
                         sub_coverage: np.ndarray, sub_same: np.ndarray | None = None, depth_tol: float = 0.02) -> int:
-    """Box-filter the edge pixels among (``ys``, ``xs``) in place and return how many there were.
+    """Filter the edge pixels among (``ys``, ``xs``) over their subsamples in place and return how
+    many there were.
 
     Parameters
     ----------

@@ -237,13 +237,7 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
     jobs = []  # per mesh: (first band, bands, kernel arguments after the band range)
     first = 0
     for mesh, out in zip(meshes, outs):
-        r, t = src_from_tgt(mesh.camera, camera)
-        nq = len(mesh.rects)
-        coef = np.empty((nq, 12), np.float64)
-        bbox = np.empty((nq, 4), np.int32)
-        run_bands(_k.setup_quads, nq, mesh.rects, mesh.inv_depth_planes, _intrinsics(mesh.camera), r, t, kt_inv, kt, w,
-                  h, coef, bbox, min_rows=4096)  # quads: a piece per thread from 8192 quads on
-        flags = _clamp_flags(mesh, footprint, depth_tol)
+        coef, bbox, flags = quad_setup(mesh, camera, footprint, depth_tol, kt=kt, kt_inv=kt_inv)
         if setups is not None:
             setups.append((coef, flags))
         start, order = _k.bucket_bands(bbox, h, _nbands(h))
@@ -262,6 +256,21 @@ def _rasterize_many_into(meshes, camera: Camera, footprint: str, depth_tol: floa
     run_bands(bands, first, min_rows=1 if h * w >= _PARALLEL_PIXELS else first,
               pieces_per_thread=4 * len(jobs))  # quads crowd some bands: balance them
     return outs
+
+
+def quad_setup(mesh, camera: Camera, footprint: str, depth_tol: float, *, kt=None, kt_inv=None):
+    """Each quad of ``mesh`` set up for ``camera`` (``_raster_kernels.setup_quads``): (Q, 12)
+    coefficient rows ``[g, Hx, Hy, Hz]``, (Q, 4) int32 target bounding boxes and (Q, 4) uint8
+    clamp flags of ``footprint``. ``kt``, ``kt_inv``: the camera's intrinsics vector and
+    inverse K, if at hand (internal; arguments are not checked here)."""
+    r, t = src_from_tgt(mesh.camera, camera)
+    nq = len(mesh.rects)
+    coef = np.empty((nq, 12), np.float64)
+    bbox = np.empty((nq, 4), np.int32)
+    run_bands(_k.setup_quads, nq, mesh.rects, mesh.inv_depth_planes, _intrinsics(mesh.camera), r, t,
+              np.linalg.inv(camera.K) if kt_inv is None else kt_inv, _intrinsics(camera) if kt is None else kt,
+              camera.width, camera.height, coef, bbox, min_rows=4096)  # quads: a piece per thread from 8192 quads on
+    return coef, bbox, _clamp_flags(mesh, footprint, depth_tol)
 
 
 _scratch_local = threading.local()
