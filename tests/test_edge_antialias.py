@@ -255,7 +255,7 @@ def test_cli_interpolate_and_warp_take_antialias(tmp_path, capsys):
     assert warped[("--antialias",)] > warped[()] + 0.3, warped
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=60, deadline=None)
 @given(st.integers(0, 2**31 - 1), st.sampled_from([np.uint8, np.float32]))
 def test_random_step_scenes_come_back_unchanged_at_their_own_pose(seed, dtype):
     """Random blocks of depth (steps of any size, NaN holes) and colour: every pixel a source

@@ -29,6 +29,7 @@ def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects
     cand = np.empty(9, np.int64)
     best = np.empty(m, np.float64)
     won = np.empty(m, np.int64)  # the quad each subsample found
+    in_centre = np.empty(m, np.bool_)  # inside the outline of the centre's quad
     for i in range(i0, i1):
         x, y = xs[i], ys[i]
         centre = -1
@@ -53,6 +54,7 @@ def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects
         for s in range(m):
             best[s] = 0.0
             won[s] = -1
+            in_centre[s] = False
             out_u[s, i] = far_coord
             out_v[s, i] = far_coord
         for j in range(nc):
@@ -66,7 +68,7 @@ def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects
                 fu = x + offsets[s, 0]
                 fv = y + offsets[s, 1]
                 iz = g0 * fu + g1 * fv + g2
-                if not (iz > best[s]):
+                if not (iz > best[s]) and q != centre:
                     continue
                 hz = z0 * fu + z1 * fv + z2
                 if not (hz > 0.0):
@@ -75,6 +77,10 @@ def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects
                 hy = y0 * fu + y1 * fv + y2
                 if not (hx - eu0 * hz >= 0.0 and hx - eu1 * hz < 0.0 and hy - ev0 * hz >= 0.0 and hy - ev1 * hz < 0.0):
                     continue
+                if q == centre:
+                    in_centre[s] = True  # inside the centre quad's outline, whatever its plane says there
+                    if not (iz > best[s]):
+                        continue
                 us = hx / hz
                 vs = hy / hz
                 if clamp[q, 0] != 0 and us < eu0 + 0.5:
@@ -93,7 +99,9 @@ def _subsample_quads(i0, i1, xs, ys, offsets, map_u, map_v, coverage, qop, rects
             b = best[s]
             out_c[s, i] = b > 0.0
             out_z[s, i] = 1.0 / b if b > 0.0 else np.nan
-            out_same[s, i] = won[s] == centre
+            # on the centre's quad; or uncovered inside its outline (a plane fitted exactly to two
+            # pixels across a step reaches 1/z <= 0 within its own pixel): as the centre, no edge
+            out_same[s, i] = won[s] == centre or (b <= 0.0 and in_centre[s])
 
 
 #: Candidates ``i0 .. i1-1`` without the GIL (:func:`ibr.render.bands.run_bands` splits them
