@@ -105,9 +105,9 @@ class Rendering:
         return View(self.color, self.depth, self.camera, name)
 
 
-#: Subsamples per pixel (k x k) at the depth edges of an anti-aliased frame
-#: (:mod:`ibr.render.edge_antialias`), and the relative depth difference that makes an edge.
-EDGE_SUBSAMPLES = 3
+#: An anti-aliased frame's (:mod:`ibr.render.edge_antialias`) edge test: the relative depth
+#: difference that makes a step, and the colour span (of full scale) below which an edge is left
+#: as it is (0: the same figures with 35 % more candidates; 64/255: clutter's band -0.14 dB).
 EDGE_DEPTH_TOL = 0.02
 EDGE_CONTRAST = 32 / 255
 
@@ -418,7 +418,8 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
 
 @dataclass(frozen=True)
 class _EdgeSubsamples:
-    """The composited k x k subsamples of a frame's candidate edge pixels (``ys``, ``xs``)."""
+    """The composited subsamples of a frame's candidate edge pixels (``ys``, ``xs``) and which of
+    them lie on their centre's quads in every source (``same``)."""
 
     ys: np.ndarray
     xs: np.ndarray
@@ -444,7 +445,7 @@ def _edge_subsamples(views, maps, setups, camera, weights, comp, footprint, comp
 
 
 def _antialias(r: "Rendering", edges: "_EdgeSubsamples | None") -> "Rendering":
-    """``r`` with its edge pixels box-filtered over their subsamples (in place)."""
+    """``r`` with its edge pixels filtered over their subsamples (in place)."""
     if edges is not None:
         color = r.color if r.color.ndim == 3 else r.color[..., None]
         sub_color = edges.sub.color if edges.sub.color.ndim == 3 else edges.sub.color[..., None]
@@ -760,8 +761,7 @@ def iter_interpolate(
     from .forward import SPLATS
 
     check_choice("splat", splat, SPLATS)
-    if not isinstance(silhouettes, (bool, np.bool_)):
-        raise TypeError(f"silhouettes: expected True or False, got {silhouettes!r}")
+    _check_flag("silhouettes", silhouettes)
     _check_flag("antialias", antialias)
     depth_tol = check_positive("depth_tol", depth_tol)
     k = check_supersample(supersample)
