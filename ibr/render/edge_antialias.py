@@ -14,7 +14,7 @@ and its own colour (counted twice: a tent over the pixel) (:func:`average_edge_p
 
 At a source's own pose every subsample lies in its pixel's own quad, so a source comes back
 unchanged. Measured (``python benchmarks/bench_edges.py --quick``, t = .25/.5/.75, covered
-pixels): clutter's edge band 28.47 -> 29.90 dB, room's 30.98 -> 31.34; the real motorcycle warp
+pixels): clutter's edge band 28.47 -> 29.99 dB, room's 30.98 -> 31.34; the real motorcycle warp
 27.57 -> 27.93 dB; the 512 x 512 frame about 1.5x (docs/edges.md).
 
 Conventions: pixel (u, v) = (column, row), centres at integers; depth is planar z in the target

@@ -40,7 +40,7 @@ import numpy as np
 from ..base.camera import Camera
 from .composite import mixed_pixels
 
-__all__ = ["MAX_ALPHA", "MIN_CHANGE", "MIN_CONTRAST", "RimMatte", "rematte_rims", "rim_matte"]
+__all__ = ["MAX_ALPHA", "MIN_CHANGE", "MIN_CONTRAST", "RimMatte", "rematte_rims", "rematte_subsamples", "rim_matte"]
 
 #: Smallest RMS difference (fraction of the colour's full scale) between a rim pixel's foreground
 #: and background colours at which its alpha is read from its colour.
@@ -288,3 +288,86 @@ def _shows(maps, px, zt, tol) -> np.ndarray:
     """Whether a layer covers target pixels ``px`` (flat) at the composite's depth ``zt``."""
     with np.errstate(invalid="ignore"):
         return np.take(maps.coverage.reshape(-1), px) & (np.abs(np.take(maps.depth.reshape(-1), px) - zt) <= tol * zt)
+
+
+def rematte_subsamples(sub_color: np.ndarray, sub_depth: np.ndarray, sub_layers, ys, xs, color: np.ndarray,
+                       depth: np.ndarray, mattes, source_shapes, *, depth_tol: float = _STEP) -> int:
+    """:func:`rematte_rims` for the edge subsamples of :mod:`ibr.render.edge_antialias`, in place.
+
+    A subsample shown by one source alone (its layer covers it at the composite's depth, the
+    other layer does not) whose nearest source pixel is a kept rim pixel gets
+    ``+ (1 - alpha) (B_t - B_s)``, B_t the frame's colour at its pixel's neighbour toward the
+    background, where that neighbour lies farther and B_t differs from B_s by more than
+    :data:`MIN_CHANGE` in some channel.
+
+    Parameters
+    ----------
+    sub_color : (m, n, C) array
+        The composited subsamples' colour (changed in place).
+    sub_depth : (m, n) float
+        Their composited planar depth (NaN where uncovered).
+    sub_layers : sequence of maps
+        Per source, the subsamples' own maps: ``map_u``, ``map_v``, ``depth``, ``coverage`` (m, n).
+    ys, xs : (n,) int
+        The target pixels the subsamples belong to.
+    color, depth : (H, W, C), (H, W) arrays
+        The frame's composite (B_t is read there).
+    mattes, source_shapes
+        As in :func:`rematte_rims`.
+
+    Returns
+    -------
+    int
+        The number of subsamples re-mixed.
+    """
+    m, n = np.shape(sub_depth)
+    if np.shape(sub_color)[:2] != (m, n) or len(sub_layers) != len(mattes) or len(mattes) not in (1, 2):
+        raise ValueError("sub_color, sub_depth, sub_layers, mattes: expected (m, n, C) and (m, n) subsamples and one "
+                         "layer and one matte per source")
+    if any(not isinstance(mt, RimMatte) for mt in mattes):
+        raise TypeError("mattes: expected RimMatte objects (rim_matte)")
+    h, w = np.shape(depth)
+    count = 0
+    for j, (layer, matte, shape) in enumerate(zip(sub_layers, mattes, source_shapes)):
+        if not len(matte):
+            continue
+        # the cheap, selective test first: subsamples whose nearest source pixel is a rim pixel
+        idx = np.flatnonzero(layer.coverage)
+        hs, ws = shape
+        su = np.clip(np.floor(layer.map_u.reshape(-1)[idx].astype(np.float64) + 0.5), 0, ws - 1).astype(np.int64)
+        sv = np.clip(np.floor(layer.map_v.reshape(-1)[idx].astype(np.float64) + 0.5), 0, hs - 1).astype(np.int64)
+        k = _rim_index(matte, shape)[sv, su]
+        idx, k = idx[k >= 0], k[k >= 0]
+        zc = sub_depth.reshape(-1)[idx].astype(np.float64)
+        with np.errstate(invalid="ignore"):
+            keep = np.abs(layer.depth.reshape(-1)[idx] - zc) <= depth_tol * zc  # it shows that surface
+            if len(sub_layers) == 2:  # and the other source does not (else the compositor blended it in)
+                other = sub_layers[1 - j]
+                keep &= ~(other.coverage.reshape(-1)[idx] & (np.abs(other.depth.reshape(-1)[idx] - zc) <= depth_tol * zc))
+        idx, k, zc = idx[keep], k[keep], zc[keep]
+        i = idx % n
+        ty = np.clip(np.asarray(ys)[i] + matte.toward[k, 0], 0, h - 1)
+        tx = np.clip(np.asarray(xs)[i] + matte.toward[k, 1], 0, w - 1)
+        with np.errstate(invalid="ignore"):
+            farther = depth[ty, tx] > zc * (1.0 + depth_tol)
+        change = color[ty, tx].astype(np.float64) - matte.behind[k]
+        keep = farther & (np.abs(change).max(1) > MIN_CHANGE * matte.scale)
+        idx, k, change = idx[keep], k[keep], change[keep]
+        flat_color = sub_color.reshape(m * n, -1)
+        value = flat_color[idx].astype(np.float64) + (1.0 - matte.alpha[k])[:, None] * change
+        if np.issubdtype(sub_color.dtype, np.integer):
+            value = np.clip(np.rint(value), 0, np.iinfo(sub_color.dtype).max)
+        flat_color[idx] = value.astype(sub_color.dtype)
+        count += int(idx.size)
+    return count
+
+
+@functools.lru_cache(maxsize=8)
+def _rim_index(matte: RimMatte, shape) -> np.ndarray:
+    """(H_s, W_s) int64: each source pixel's index in ``matte``, -1 where it is no kept rim
+    pixel (made once per matte)."""
+    index = np.full(int(shape[0]) * int(shape[1]), -1, np.int64)
+    index[matte.flat] = np.arange(len(matte))
+    index = index.reshape(shape)
+    index.setflags(write=False)
+    return index
