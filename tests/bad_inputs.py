@@ -435,6 +435,9 @@ _add("stereo --interpolation cubic", U, "usage", r"argument --interpolation: inv
      argv=("stereo", "{d}/a.json", "--interpolation", "cubic", "-o", "{d}/s.png"))
 _add("stereo --interpolation sharp --method mesh", C, "error", r"interpolation: 'sharp' needs method='pixel'",
      argv=("stereo", "{d}/a.json", "--interpolation", "sharp", "--method", "mesh", "-o", "{d}/s.png"))
+_add("interpolate --antialias --method forward", C, "error", r"antialias: the edge subsamples trace the quad mesh, "
+     r"so it needs method='mesh'", argv=("interpolate", "{d}/a.json", "{d}/b.json", "--method", "forward", "--antialias",
+                                         "--out", "{d}/fr"))
 _add("stereo --auto with --e", C, "error", r"--auto: give either --auto or --e/--f", argv=("stereo", "{d}/a.json", "--auto",
      "--e", "0.1", "--f", "2", "-o", "{d}/s.png"))
 _add("stereo --e without --f", C, "error", r"--e: needs --f", argv=("stereo", "{d}/a.json", "--e", "0.1", "-o", "{d}/s.png"))
@@ -715,6 +718,8 @@ _lib("load_view misspelled 'dpeth' (as the CLI)", "error", r"unknown key 'dpeth'
 _lib("interpolate antialias 'yes'", "error", r"antialias: expected True or False, got 'yes'",
      lambda d: _interpolate(d, antialias="yes"), (TypeError,))
 _lib("warp antialias 1", "error", r"antialias: expected True or False, got 1", lambda d: _warp(d, antialias=1), (TypeError,))
+_lib("warp antialias with the forward splat", "error", r"antialias: .* needs method='mesh'",
+     lambda d: _warp(d, antialias=True, method="forward"))
 _lib("upconvert antialias None", "error", r"antialias: expected True or False, got None",
      lambda d: list(_upconvert(d, antialias=None)), (TypeError,))
 

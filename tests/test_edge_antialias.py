@@ -191,6 +191,12 @@ def test_fill_modes_and_the_flag(clutter):
         vs.interpolate(a, b, cam, antialias="yes")
     with pytest.raises(TypeError, match="antialias: expected True or False"):
         vs.warp(a, cam, antialias=1)
+    with pytest.raises(ValueError, match="antialias: the edge subsamples trace the quad mesh"):
+        vs.interpolate(a, b, cam, method="forward", antialias=True)
+    from ibr.sequence.frame_rate import upconvert
+
+    with pytest.raises(ValueError, match="needs method='mesh'"):  # at once, before any frame
+        next(upconvert([a, b], 2, method="forward", antialias=True))
     # supersampling subsamples every pixel: the flag changes nothing there
     k3 = [vs.warp(a, cam, supersample=3, antialias=x).color for x in (True, False)]
     np.testing.assert_array_equal(*k3)

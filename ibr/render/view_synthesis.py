@@ -39,6 +39,7 @@ from ..base.view import View, no_valid_depth_message
 
 __all__ = [
     "INTERPOLATIONS",
+    "check_antialias",
     "METHODS",
     "Rendering",
     "interpolate",
@@ -591,6 +592,15 @@ def _check_flag(name: str, value) -> None:
         raise TypeError(f"{name}: expected True or False, got {value!r}")
 
 
+def check_antialias(antialias, method: str) -> bool:
+    """``antialias`` as a bool; True only with the mesh method (the subsamples trace its quads)."""
+    _check_flag("antialias", antialias)
+    if antialias and method != "mesh":
+        raise ValueError(f"antialias: the edge subsamples trace the quad mesh, so it needs method='mesh' (--method "
+                         f"mesh on the command line), got method={method!r}")
+    return bool(antialias)
+
+
 def _check_target(camera, name="camera") -> Camera:
     if isinstance(camera, View):
         return camera.camera
@@ -704,7 +714,7 @@ def warp(
 
     check_choice("splat", splat, SPLATS)  # checked for the mesh method too, where it is unused
     k = check_supersample(supersample)
-    _check_flag("antialias", antialias)
+    antialias = check_antialias(antialias, method)
     interpolation = _at_supersampling(interpolation, k)
     _check_source(view, "view")  # one source: without any valid depth nothing can be drawn, either method
     camera = _check_target(camera)
@@ -771,7 +781,7 @@ def iter_interpolate(
 
     check_choice("splat", splat, SPLATS)
     _check_flag("silhouettes", silhouettes)
-    _check_flag("antialias", antialias)
+    antialias = check_antialias(antialias, method)
     depth_tol = check_positive("depth_tol", depth_tol)
     k = check_supersample(supersample)
     interpolation = _at_supersampling(interpolation, k)
@@ -795,7 +805,7 @@ def iter_interpolate(
     opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
     return _frames(view_a, view_b, cams, ts, k, opts, method=method, footprint=footprint, splat=splat,
                    interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
-                   silhouettes=silhouettes, fill=fill, antialias=bool(antialias))
+                   silhouettes=silhouettes, fill=fill, antialias=antialias)
 
 
 def _frames(view_a, view_b, cams, ts, k, opts, *, method, footprint, splat, interpolation, composite_mode,

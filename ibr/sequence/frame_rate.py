@@ -32,7 +32,7 @@ from ..base.validate import check_choice
 from ..base.view import View
 from ..render.fill import FILLS, _fill_previous_inplace, parallax_axis
 from ..render.supersample import check_supersample
-from ..render.view_synthesis import Rendering, iter_interpolate
+from ..render.view_synthesis import Rendering, check_antialias, iter_interpolate
 
 __all__ = ["SequenceFrame", "frame_count", "frame_schedule", "upconvert"]
 
@@ -162,11 +162,10 @@ def upconvert(
     factor = _check_factor(factor)
     check_choice("fill", fill, FILLS)
     check_supersample(supersample)
-    if not isinstance(antialias, (bool, np.bool_)):
-        raise TypeError(f"antialias: expected True or False, got {antialias!r}")
+    antialias = check_antialias(antialias, method)
     inner_fill = "none" if fill == "previous" else fill
     opts = dict(method=method, composite_mode=composite_mode, interpolation=interpolation,
-                mesh_options=mesh_options, fill=inner_fill, supersample=supersample, antialias=bool(antialias))
+                mesh_options=mesh_options, fill=inner_fill, supersample=supersample, antialias=antialias)
     it = iter(views)
     try:
         a = next(it)
