@@ -10,12 +10,14 @@ the quads that cover the pixel or one of its eight neighbours at their centres
 (:func:`subsample_maps`; a quad that covers none of those nine centres is missed, as the frame
 misses it), the subsamples are composited as the frame's pixels are (trust, blend, z-test), and
 a pixel whose subsamples lie on two surfaces, or are partly uncovered, takes the mean of them
-and its own colour (counted twice: a tent over the pixel) (:func:`average_edge_pixels`).
+and its own colour (counted twice: a tent over the pixel) (:func:`average_edge_pixels`). View
+synthesis re-mixes the foreground-rim subsamples that one source alone shows over the target's
+background (:func:`~ibr.render.matting.rematte_subsamples`) before they are averaged.
 
 At a source's own pose every subsample lies in its pixel's own quad, so a source comes back
 unchanged. Measured (``python benchmarks/bench_edges.py --quick``, t = .25/.5/.75, covered
 pixels): clutter's edge band 28.47 -> 29.99 dB, room's 30.98 -> 31.34; the real motorcycle warp
-27.57 -> 27.93 dB; the 512 x 512 frame about 1.5x (docs/edges.md).
+27.57 -> 27.93 dB; the 512 x 512 frame 1.5-1.65x (docs/edges.md).
 
 Conventions: pixel (u, v) = (column, row), centres at integers; depth is planar z in the target
 camera, NaN where uncovered; subsample s of candidate i is entry [s, i] of the (m, n) arrays.
