@@ -327,24 +327,23 @@ def rematte_subsamples(sub_color: np.ndarray, sub_depth: np.ndarray, sub_layers,
     if any(not isinstance(mt, RimMatte) for mt in mattes):
         raise TypeError("mattes: expected RimMatte objects (rim_matte)")
     h, w = np.shape(depth)
+    zc_all = np.asarray(sub_depth, np.float64).reshape(-1)
+    with np.errstate(invalid="ignore"):  # which source shows each subsample's surface
+        shows = [np.asarray(L.coverage).reshape(-1) & (np.abs(np.asarray(L.depth, np.float64).reshape(-1) - zc_all)
+                                                       <= depth_tol * zc_all) for L in sub_layers]
     count = 0
     for j, (layer, matte, shape) in enumerate(zip(sub_layers, mattes, source_shapes)):
         if not len(matte):
             continue
-        # the cheap, selective test first: subsamples whose nearest source pixel is a rim pixel
-        idx = np.flatnonzero(layer.coverage)
+        # shown by this source alone (where the other shows it too, the compositor blended it in) ...
+        idx = np.flatnonzero(shows[j] & ~shows[1 - j] if len(sub_layers) == 2 else shows[j])
+        # ... from one of its kept rim pixels
         hs, ws = shape
         su = np.clip(np.floor(layer.map_u.reshape(-1)[idx].astype(np.float64) + 0.5), 0, ws - 1).astype(np.int64)
         sv = np.clip(np.floor(layer.map_v.reshape(-1)[idx].astype(np.float64) + 0.5), 0, hs - 1).astype(np.int64)
         k = _rim_index(matte, shape)[sv, su]
         idx, k = idx[k >= 0], k[k >= 0]
-        zc = sub_depth.reshape(-1)[idx].astype(np.float64)
-        with np.errstate(invalid="ignore"):
-            keep = np.abs(layer.depth.reshape(-1)[idx] - zc) <= depth_tol * zc  # it shows that surface
-            if len(sub_layers) == 2:  # and the other source does not (else the compositor blended it in)
-                other = sub_layers[1 - j]
-                keep &= ~(other.coverage.reshape(-1)[idx] & (np.abs(other.depth.reshape(-1)[idx] - zc) <= depth_tol * zc))
-        idx, k, zc = idx[keep], k[keep], zc[keep]
+        zc = zc_all[idx]
         i = idx % n
         ty = np.clip(np.asarray(ys)[i] + matte.toward[k, 0], 0, h - 1)
         tx = np.clip(np.asarray(xs)[i] + matte.toward[k, 1], 0, w - 1)
