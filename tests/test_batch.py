@@ -438,3 +438,22 @@ def test_a_folder_named_none_is_still_an_output():
 
     job = _job_from({"command": "interpolate a.json b.json --out none"}, 0, Path("."), build_parser())
     assert job.outputs == ("none",)
+
+
+def test_a_commit_whose_log_line_was_lost_is_logged_by_the_recovering_attempt(tmp_path, views):
+    """A worker killed between the job's record (the commit) and its commits.log line: the next
+    attempt of the same run finds the record, reports the job done (recovered) and writes the
+    missing line once (the kill landed there once in CI: stereo-1 done, no line)."""
+    from ibr.sequence.jobs import run_job
+
+    path = _make_batch(tmp_path, views)
+    job = load_jobs(path)[0]
+    records = tmp_path / ".ibr-batch"
+    first = run_job(job, "run-1", records)
+    assert first["status"] == "done" and _commits(tmp_path, "run-1") == [job.id]
+    (records / "commits.log").write_text("")  # as if the worker died right after the record
+    again = run_job(job, "run-1", records)
+    assert again["status"] == "done" and again["recovered"]
+    assert _commits(tmp_path, "run-1") == [job.id]
+    assert run_job(job, "run-1", records)["recovered"] and _commits(tmp_path, "run-1") == [job.id]  # once
+    assert run_job(job, "run-2", records)["status"] == "skipped" and _commits(tmp_path, "run-2") == []

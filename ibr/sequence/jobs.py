@@ -42,7 +42,9 @@ Running a job (:func:`run_job`, on any worker) is idempotent and leaves no parti
 
 Records live in one folder (default ``.ibr-batch/`` beside the batch file): ``<id>.json`` with
 the command line, input and output checksums, the run and attempt that committed it, and
-``commits.log``, one line per commit (how the tests see that every job was committed once).
+``commits.log``, one line per commit (how the tests see that every job was committed once; a
+worker killed between the record and its line leaves the line to the attempt that finds the
+record).
 """
 
 from __future__ import annotations
@@ -426,6 +428,24 @@ def _up_to_date(record, job: Job, inputs: dict) -> bool:
     return True
 
 
+def _log_commit_once(records: Path, line: dict) -> None:
+    """Append ``line`` to ``commits.log`` unless it is there: the commit of an attempt whose worker
+    died after writing the job's record (the commit itself, atomic) and before its log line."""
+    try:
+        logged = (records / "commits.log").read_text(encoding="utf-8").splitlines()
+    except OSError:
+        logged = []
+    if not any(_json_line(x) == line for x in logged):
+        _append_log(records, line)
+
+
+def _json_line(text: str):
+    try:
+        return json.loads(text)
+    except ValueError:
+        return None
+
+
 def _append_log(records: Path, line: dict) -> None:
     data = (json.dumps(line, sort_keys=True) + "\n").encode()
     fd = os.open(records / "commits.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
@@ -608,6 +628,8 @@ def run_job(job: Job | dict, run_id: str, records, *, threads_per_job: int = 1, 
             result["status"] = "done" if record.get("run") == run_id else "skipped"
             result["recovered"] = record.get("run") == run_id
             result["outputs"] = sorted(record["outputs"])
+            if result["recovered"]:  # a worker killed between its record and its log line: the line
+                _log_commit_once(records, {"id": job.id, "run": run_id, "attempt": record.get("attempt")})
             return result
         token = uuid.uuid4().hex[:12]
         argv, stages, staged_to_final = _stage_argv(job, token)
