@@ -204,12 +204,23 @@ def rematte_rims(color: np.ndarray, depth: np.ndarray, camera: Camera, layers, m
         return 0
     keep = _shown_alone(rims, k, px, layers, source_shapes, depth, depth_tol)
     px, k = px[keep], k[keep]
-    change = b_t[keep] - rims.behind[k]
-    value = color.reshape(h * w, -1)[px].astype(np.float64) + (1.0 - rims.alpha[k])[:, None] * change
-    if np.issubdtype(color.dtype, np.integer):
-        value = np.clip(np.rint(value), 0, np.iinfo(color.dtype).max)
-    color[px // w, px % w] = value.astype(color.dtype)  # after every test read the composite as it was
+    flat = color.reshape(h * w, -1)
+    flat[px] = _remixed(flat[px], rims.alpha[k], b_t[keep] - rims.behind[k])  # after every test read the composite
     return int(px.size)
+
+
+def _remixed(colors: np.ndarray, alpha: np.ndarray, change: np.ndarray) -> np.ndarray:
+    """``colors`` (N, C) with the background in their mix swapped: ``C + (1 - alpha) (B_t - B_s)``
+    (``change`` = B_t - B_s), in their dtype (integers rounded and clipped)."""
+    value = colors.astype(np.float64) + (1.0 - alpha)[:, None] * change
+    if np.issubdtype(colors.dtype, np.integer):
+        value = np.clip(np.rint(value), 0, np.iinfo(colors.dtype).max)
+    return value.astype(colors.dtype)
+
+
+def _background_changed(change: np.ndarray, scale: float) -> np.ndarray:
+    """(N,) bool: B_t - B_s (``change``, (N, C)) over :data:`MIN_CHANGE` of full ``scale`` in some channel."""
+    return np.abs(change).max(1) > MIN_CHANGE * scale
 
 
 def _candidates(rims, color, depth, camera: Camera, tol: float):
@@ -239,7 +250,7 @@ def _candidates(rims, color, depth, camera: Camera, tol: float):
         keep = (np.abs(np.take(z, k) - zt) <= tol * zt) & (np.take(zf, pb) > zt * (1.0 + tol))
     k, px, pb = k[keep], px[keep], pb[keep]
     b_t = np.take(color.reshape(h * w, -1), pb, axis=0).astype(np.float64)
-    keep = np.abs(b_t - np.take(rims.behind, k, axis=0)).max(1) > MIN_CHANGE * rims.scale
+    keep = _background_changed(b_t - np.take(rims.behind, k, axis=0), rims.scale)
     return k[keep], px[keep], b_t[keep]
 
 
@@ -306,8 +317,9 @@ def rematte_subsamples(sub_color: np.ndarray, sub_depth: np.ndarray, sub_layers,
         The composited subsamples' colour (changed in place).
     sub_depth : (m, n) float
         Their composited planar depth (NaN where uncovered).
-    sub_layers : sequence of maps
-        Per source, the subsamples' own maps: ``map_u``, ``map_v``, ``depth``, ``coverage`` (m, n).
+    sub_layers : sequence of SourceMaps
+        Per source, the subsamples' own maps, (m, n) arrays (their nearest source pixel is
+        :meth:`~ibr.render.rasterize.SourceMaps.nearest_source_pixel`'s).
     ys, xs : (n,) int
         The target pixels the subsamples belong to.
     color, depth : (H, W, C), (H, W) arrays
@@ -338,10 +350,7 @@ def rematte_subsamples(sub_color: np.ndarray, sub_depth: np.ndarray, sub_layers,
         # shown by this source alone (where the other shows it too, the compositor blended it in) ...
         idx = np.flatnonzero(shows[j] & ~shows[1 - j] if len(sub_layers) == 2 else shows[j])
         # ... from one of its kept rim pixels
-        hs, ws = shape
-        su = np.clip(np.floor(layer.map_u.reshape(-1)[idx].astype(np.float64) + 0.5), 0, ws - 1).astype(np.int64)
-        sv = np.clip(np.floor(layer.map_v.reshape(-1)[idx].astype(np.float64) + 0.5), 0, hs - 1).astype(np.int64)
-        k = _rim_index(matte, shape)[sv, su]
+        k = _rim_index(matte, shape)[layer.nearest_source_pixel(idx // n, idx % n, shape)]
         idx, k = idx[k >= 0], k[k >= 0]
         zc = zc_all[idx]
         i = idx % n
@@ -350,13 +359,10 @@ def rematte_subsamples(sub_color: np.ndarray, sub_depth: np.ndarray, sub_layers,
         with np.errstate(invalid="ignore"):
             farther = depth[ty, tx] > zc * (1.0 + depth_tol)
         change = color[ty, tx].astype(np.float64) - matte.behind[k]
-        keep = farther & (np.abs(change).max(1) > MIN_CHANGE * matte.scale)
+        keep = farther & _background_changed(change, matte.scale)
         idx, k, change = idx[keep], k[keep], change[keep]
         flat_color = sub_color.reshape(m * n, -1)
-        value = flat_color[idx].astype(np.float64) + (1.0 - matte.alpha[k])[:, None] * change
-        if np.issubdtype(sub_color.dtype, np.integer):
-            value = np.clip(np.rint(value), 0, np.iinfo(sub_color.dtype).max)
-        flat_color[idx] = value.astype(sub_color.dtype)
+        flat_color[idx] = _remixed(flat_color[idx], matte.alpha[k], change)
         count += int(idx.size)
     return count
 

@@ -407,8 +407,7 @@ def _render(views, camera, weights, *, method, footprint, splat, mesh_options, i
                              composite_mode=composite_mode, depth_tol=depth_tol, dtype=dtype, silhouettes=silhouettes)
     comp = _composite_maps(views, maps, weights, **composite_options)
     if mattes is not None and not antialias:  # (anti-aliased: the subsamples are re-mixed instead)
-        color = comp.color if comp.color.ndim == 3 else comp.color[..., None]
-        rematte_rims(color, comp.depth, camera, maps, mattes, [v.depth.shape for v in views])
+        rematte_rims(comp.color, comp.depth, camera, maps, mattes, [v.depth.shape for v in views])
     stray = _stray_samples(maps, views, comp.coverage)
     if stray is not None:
         comp = Composite(comp.color, comp.depth, comp.coverage, stray if comp.replace is None else comp.replace | stray)
@@ -446,10 +445,8 @@ def _edge_subsamples(views, maps, setups, camera, weights, comp, footprint, comp
     if mattes is not None and n:  # foreground-rim subsamples over the target's background
         layers = [SourceMaps(*[unpack_subsamples(getattr(t[0], f), n) for f in ("map_u", "map_v", "depth", "coverage")])
                   for t in traced]
-        rematte_subsamples(unpack_subsamples(sub.color if sub.color.ndim == 3 else sub.color[..., None], n),
-                           unpack_subsamples(sub.depth, n), layers, ys, xs,
-                           comp.color if comp.color.ndim == 3 else comp.color[..., None], comp.depth, mattes,
-                           [v.depth.shape for v in views])
+        rematte_subsamples(unpack_subsamples(sub.color, n), unpack_subsamples(sub.depth, n), layers, ys, xs,
+                           comp.color, comp.depth, mattes, [v.depth.shape for v in views])
     return _EdgeSubsamples(ys, xs, Composite(*[unpack_subsamples(a, n) for a in (sub.color, sub.depth, sub.coverage)]),
                            same)
 
@@ -457,9 +454,8 @@ def _edge_subsamples(views, maps, setups, camera, weights, comp, footprint, comp
 def _antialias(r: "Rendering", edges: "_EdgeSubsamples | None") -> "Rendering":
     """``r`` with its edge pixels filtered over their subsamples (in place)."""
     if edges is not None:
-        color = r.color if r.color.ndim == 3 else r.color[..., None]
-        sub_color = edges.sub.color if edges.sub.color.ndim == 3 else edges.sub.color[..., None]
-        average_edge_pixels(color, r.depth, edges.ys, edges.xs, sub_color, edges.sub.depth,
+        color = r.color if r.color.ndim == 3 else r.color[..., None]  # (a composite's colour is (H, W, C))
+        average_edge_pixels(color, r.depth, edges.ys, edges.xs, edges.sub.color, edges.sub.depth,
                             edges.sub.coverage, edges.same, EDGE_DEPTH_TOL)
     return r
 
