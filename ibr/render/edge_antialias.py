@@ -31,6 +31,7 @@ import cv2
 import numpy as np
 
 from . import _edge_kernels as _k
+from .composite import _pixels_of
 from .rasterize import SourceMaps, quad_setup
 from .bands import run_bands
 from ..base.camera import Camera
@@ -74,11 +75,7 @@ def edge_candidates(depth: np.ndarray, color: np.ndarray, *, depth_tol: float = 
         mask &= cv2.compare(span, float(contrast), cv2.CMP_GE)
     if exclude is not None:
         mask[exclude] = 0
-    found = cv2.findNonZero(mask)
-    if found is None:
-        return np.empty(0, np.int64), np.empty(0, np.int64)
-    xs, ys = found.reshape(-1, 2).T.astype(np.int64)
-    return ys, xs
+    return _pixels_of(mask)
 
 
 def subsample_maps(mesh, camera: Camera, maps: SourceMaps, ys, xs, *, footprint: str = "free",
@@ -157,7 +154,7 @@ def average_edge_pixels(color: np.ndarray, depth: np.ndarray, ys, xs, sub_color:
         raise ValueError(f"color: expected an (H, W, C) array of the depth's size {depth.shape}")
     ys, xs = _check_pixels(ys, xs, depth.shape)
     m, n = len(SUBSAMPLE_OFFSETS), len(ys)
-    if np.shape(sub_depth) != (m, n) or np.shape(sub_coverage) != (m, n) or np.shape(sub_color) != (m, n, color.shape[2]):
+    if (np.shape(sub_depth), np.shape(sub_coverage), np.shape(sub_color)) != ((m, n), (m, n), (m, n, color.shape[2])):
         raise ValueError(f"sub_color, sub_depth, sub_coverage: expected shapes {(m, n, color.shape[2])}, {(m, n)}, "
                          f"{(m, n)} (the subsamples of the {n} pixels), got {np.shape(sub_color)}, "
                          f"{np.shape(sub_depth)}, {np.shape(sub_coverage)}")
@@ -169,8 +166,8 @@ def average_edge_pixels(color: np.ndarray, depth: np.ndarray, ys, xs, sub_color:
     edge = np.zeros(n, np.bool_)
     if n:
         _k.average_edges(color, depth, ys, xs, sub_color, sub_depth, sub_coverage,
-                         np.ascontiguousarray(sub_same, np.bool_), float(depth_tol), np.issubdtype(color.dtype, np.integer),
-                         edge)
+                         np.ascontiguousarray(sub_same, np.bool_), float(depth_tol),
+                         np.issubdtype(color.dtype, np.integer), edge)
     return int(edge.sum())
 
 
