@@ -27,7 +27,9 @@ viewpoint blend), ``fill="background"`` (directional fill of rows and columns), 
 3. Synthetic pairs re-encoded as 8-bit integer disparity (the pair's own baseline, like
    Middlebury ground truth) and as 16-bit millimetre depth: quads and PSNR over covered pixels,
    without and with the encoding's quantization (with the default sharp sampling and with plain
-   bilinear colour: crisper textures make a misplaced one cost more).
+   bilinear colour: crisper textures make a misplaced one cost more); for 8-bit disparity also
+   with the planes on the codes only ("code planes": before the large quads were fitted to the
+   other source's colour, :mod:`ibr.render.plane_refine`).
 4. Time of the 512x512 two-source frame with cached meshes (issue target <= 8 ms), before and
    after options, back to back; and of the quality options (``supersample=3``, bicubic colour)
    against the default. Sections 1 and 2 score those options too.
@@ -39,6 +41,7 @@ Writes ``benchmarks/results/edges_motorcycle_fill.png`` and ``edges_clutter_silh
 from __future__ import annotations
 
 import argparse
+import contextlib
 import shutil
 import sys
 import time
@@ -57,6 +60,7 @@ from ibr.base.depth import DepthQuantization  # noqa: E402
 from ibr.base.view import View  # noqa: E402
 from ibr.io import load_view  # noqa: E402
 from ibr.mesh import build_mesh  # noqa: E402
+from ibr.render import plane_refine  # noqa: E402
 from ibr.render.composite import viewpoint_weights  # noqa: E402
 from ibr.render.fill import fill_background, fill_pullpush, parallax_axis  # noqa: E402
 from ibr.render.rasterize import render_mesh  # noqa: E402
@@ -254,9 +258,21 @@ def section_motorcycle(repeats, classical):
     return r0, old_c, default.color
 
 
+@contextlib.contextmanager
+def code_planes():
+    """Quads of quantized depth keep their least-squares planes on the codes (before the
+    photo-consistent planes of :mod:`ibr.render.plane_refine`, fifteenth session)."""
+    saved = plane_refine.COARSE_PX
+    plane_refine.COARSE_PX = np.inf
+    try:
+        yield
+    finally:
+        plane_refine.COARSE_PX = saved
+
+
 def section_quantized():
     print("\n3. quantized re-encodings: quads of source a and PSNR over covered pixels (t = 0.25/0.5/0.75)")
-    print(f"{'scene':<8} {'encoding':<32} {'quads':>6} {'x exact':>8} {'PSNR dB':>8} {'vs exact':>9}")
+    print(f"{'scene':<8} {'encoding':<44} {'quads':>6} {'x exact':>8} {'PSNR dB':>8} {'vs exact':>9}")
     for name in ("room", "clutter"):
         a, b, truths = load_pair(name)
         cams = [g.camera for g in truths]
@@ -273,18 +289,25 @@ def section_quantized():
             return n, got
 
         n0, (p0, l0) = scores(a, b, None)
-        print(f"{name:<8} {'exact float depth':<32} {n0:6d} {1.0:8.2f} {p0:8.2f} {0.0:9.2f}   bilinear {l0:.2f}")
-        disp = [View(v.color, (base * f / np.rint(base * f / v.depth)).astype(np.float32), v.camera, v.name)
-                for v in (a, b)]
-        assert all(np.nanmax(base * f / v.depth) <= 255 for v in disp)
+        print(f"{name:<8} {'exact float depth':<44} {n0:6d} {1.0:8.2f} {p0:8.2f} {0.0:9.2f}   bilinear {l0:.2f}")
+
+        def disparity_views():
+            return [View(v.color, (base * f / np.rint(base * f / v.depth)).astype(np.float32), v.camera, v.name)
+                    for v in (a, b)]
+
+        assert all(np.nanmax(base * f / v.depth) <= 255 for v in (a, b))
         mm = [View(v.color, (np.rint(v.depth * 1000) / 1000).astype(np.float32), v.camera, v.name) for v in (a, b)]
-        for label, views, q in (("8-bit disparity, no quantization", disp, None),
-                                ("8-bit disparity, quantization", disp,
-                                 DepthQuantization.disparity(baseline=base, focal_px=f)),
-                                ("16-bit mm, no quantization", mm, None),
-                                ("16-bit mm, quantization", mm, DepthQuantization.codes(0.001))):
-            n, (p, lp) = scores(*views, q)
-            print(f"{name:<8} {label:<32} {n:6d} {n / n0:8.2f} {p:8.2f} {p - p0:+9.2f}   bilinear {lp:.2f} {lp - l0:+.2f}")
+        disparity = DepthQuantization.disparity(baseline=base, focal_px=f)
+        rows = (("8-bit disparity, no quantization", disparity_views(), None, False),
+                ("8-bit disparity, quantization, code planes", disparity_views(), disparity, True),
+                ("8-bit disparity, quantization", disparity_views(), disparity, False),
+                ("16-bit mm, no quantization", mm, None, False),
+                ("16-bit mm, quantization", mm, DepthQuantization.codes(0.001), False))
+        for label, views, q, before in rows:
+            with code_planes() if before else contextlib.nullcontext():
+                n, (p, lp) = scores(*views, q)
+            print(f"{name:<8} {label:<44} {n:6d} {n / n0:8.2f} {p:8.2f} {p - p0:+9.2f}   "
+                  f"bilinear {lp:.2f} {lp - l0:+.2f}")
 
 
 def section_timing(repeats):

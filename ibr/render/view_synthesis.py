@@ -282,11 +282,43 @@ def source_mesh(view: View, **mesh_options):
     key = _mesh_key(mesh_options)
     mesh = src.meshes.get(key)
     if mesh is None:
-        from ..mesh import build_mesh
+        partner = mesh_options.get(_PARTNER)
+        if partner is not None:  # the mesh without a partner, its large quads fitted to the partner's colour
+            own = {k: v for k, v in mesh_options.items() if k != _PARTNER}
+            mesh = source_mesh(view, **own)
+            other = partner()
+            if other is not None:
+                from .plane_refine import refine_planes
 
-        mesh = build_mesh(view, **mesh_options)
+                mesh = refine_planes(mesh, view, other)
+        else:
+            from ..mesh import build_mesh
+
+            mesh = build_mesh(view, **mesh_options)
         src.meshes[key] = mesh
     return mesh
+
+
+#: The mesh option (internal: added by :func:`iter_interpolate`, never a user's) holding a weak
+#: reference to the other source of a pair: the source's depth is coarsely quantized, and its
+#: mesh's large quads are fitted to the other's colour (:mod:`ibr.render.plane_refine`).
+_PARTNER = "partner"
+
+
+def _with_partners(views, opts) -> list[dict]:
+    """Each source's mesh options, plus :data:`_PARTNER` (the other source) where its depth's
+    quantization is coarse over the pair's baseline (:func:`~ibr.render.plane_refine.is_coarse`,
+    at the source's median depth)."""
+    from .plane_refine import is_coarse
+
+    out = []
+    for view, o, other in zip(views, opts, views[::-1]):
+        quant = o.get("quantization")
+        quant = quant if quant is not None else quantization_of(view)
+        baseline = float(np.linalg.norm(view.camera.position - other.camera.position))
+        coarse = is_coarse(quant, _median_depth_of(view), baseline, view.camera.fx)
+        out.append({**o, _PARTNER: weakref.ref(other)} if coarse else o)
+    return out
 
 
 #: Levels of detail from the camera move are cached on a grid of baselines 2^(k/2) (scene
@@ -787,6 +819,8 @@ def iter_interpolate(
         view_a, view_b = _source(view_a).upsampled(k), _source(view_b).upsampled(k)
     # level of detail from the span of the whole call (one mesh per source for every frame)
     opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
+    if method == "mesh" and k == 1:  # coarse depth codes: large quads fitted to the other source
+        opts = _with_partners([view_a, view_b], opts)
     return _frames(view_a, view_b, cams, ts, k, opts, method=method, footprint=footprint, splat=splat,
                    interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
                    silhouettes=silhouettes, fill=fill, antialias=antialias)

@@ -1,0 +1,261 @@
+"""Photo-consistent planes for the quads of coarsely quantized depth (issue 11, part 3).
+
+Depth stored in coarse codes (8-bit integer disparity, 16-bit z-buffers far from the camera)
+tells a plane only to half a code: the least-squares plane on the codes of a wall that lies
+inside one code is flat at the code, up to half a code (half a pixel of the pair's parallax) off
+the truth, and an interpolation then draws each source's texture a fraction of a pixel apart. The
+other source of an interpolation sees the same surfaces, so its colour says where the plane is.
+For every large quad of one source, :func:`refine_planes` fits the plane
+``1/z = a u + b v + c`` (the quad's own parametrisation, :class:`ibr.mesh.QuadMesh`) whose
+plane-induced homography maps the quad's interior pixels onto the other source's colour best:
+a robust (Huber) Gauss-Newton fit of three parameters, the Lucas-Kanade alignment of a plane
+(Baker & Matthews, "Lucas-Kanade 20 years on", 2004), first on blurred colour, then on the
+colour itself, pixels that the other source sees occluded left out. The fitted plane replaces the
+code plane only where it matches the other source better (robust cost over the pixels both
+planes see) and explains every code of the quad within :data:`TOLERANCE_CODES`; otherwise
+the quad keeps its plane (weak texture along the epipolar lines, occlusions, small quads).
+
+Measured (``python benchmarks/bench_edges.py --quick``, section 3: 8-bit disparity against the
+exact depth, covered pixels, t = .25/.5/.75): room -0.40 -> -0.27 dB, clutter -0.71 -> -0.61;
+docs/edges.md section 3 has the other scenes and what was tried.
+
+Conventions: pixel centres at integer (u, v); planes in inverse planar depth per source pixel;
+colours compared in units of their dtype's full scale.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from ..base.depth import DepthQuantization
+from ..base.view import View
+from ..mesh.quad_mesh import QuadMesh
+from .upsample import _unit_color
+
+__all__ = ["COARSE_PX", "MIN_AREA", "TOLERANCE_CODES", "is_coarse", "refine_planes"]
+
+#: Quads of at least this many pixels are refined: smaller ones hold too few pixels for a plane
+#: (on clutter, quads down to 20 px changed nothing: the fits did not match better).
+MIN_AREA = 200
+#: A source's depth is refined when one code moves a point at its median depth by at least this
+#: many pixels between the two cameras (8-bit disparity at the pair's baseline: 1 px; 16-bit
+#: millimetres at 3 m and 0.24 m: 0.01 px, left as it is).
+COARSE_PX = 0.25
+#: How far (codes, beyond the half code of rounding) a refined plane may leave a pixel's code:
+#: a quad's plane also approximates a curved surface (room -0.30 dB at 0.5, -0.27 at 1.0).
+TOLERANCE_CODES = 1.0
+#: Huber threshold of the colour residual, of full scale.
+HUBER = 8 / 255
+#: Levenberg-Marquardt damping, relative to the normal matrix's diagonal.
+DAMPING = 1e-3
+#: Gauss-Newton iterations on colour blurred with this sigma (px), then on the colour itself.
+BLUR_SIGMA = 1.0
+ITERATIONS = (4, 4)
+#: A quad with fewer pixels that the other source sees keeps its plane.
+MIN_VISIBLE = 30
+
+
+def is_coarse(quantization: DepthQuantization | None, depth: float, baseline: float, focal_px: float) -> bool:
+    """Whether one code of ``quantization`` at planar depth ``depth`` (e.g. a source's median)
+    moves a point by at least :data:`COARSE_PX` pixels over a camera move of ``baseline``
+    (scene units) at focal length ``focal_px``; ``False`` without a quantization."""
+    if quantization is None:
+        return False
+    return float(quantization.inv_step(1.0 / depth)) * focal_px * baseline >= COARSE_PX
+
+
+def refine_planes(mesh: QuadMesh, view: View, other: View) -> QuadMesh:
+    """``mesh`` (of ``view``) with the planes of its large quads fitted to ``other``'s colour.
+
+    Parameters
+    ----------
+    mesh : QuadMesh
+        A mesh of ``view`` built with a quantization (``mesh.info["quantization"]``); without
+        one it is returned as it is.
+    view, other : View
+        The mesh's source and another view of the same scene (any camera and size, same
+        colour channels), both with depth (``other``'s tells which pixels it sees occluded).
+
+    Returns
+    -------
+    QuadMesh
+        Same rects and pixel map; planes of quads of :data:`MIN_AREA` pixels or more replaced
+        where the fit matched ``other`` better and explains the quad's codes (module docstring).
+    """
+    _check_inputs(mesh, view, other)
+    quant = mesh.info.get("quantization")
+    if quant is None:
+        return mesh
+    px = _interior_pixels(mesh)
+    if len(px.qi) == 0:
+        return mesh
+    warp = _PlaneWarp(view.camera, other.camera, other.depth, quant)
+    own, target = _unit_color(view.color).astype(np.float32), _unit_color(other.color).astype(np.float32)
+    start = mesh.inv_depth_planes
+    fitted = start.copy()
+    for sigma, n in zip((BLUR_SIGMA, 0.0), ITERATIONS):
+        a, b = (cv2.GaussianBlur(c, (0, 0), sigma) for c in (own, target)) if sigma else (own, target)
+        a_px = _at(a, px.u, px.v)
+        for _ in range(n):
+            fitted = _gauss_newton_step(fitted, px, warp, a_px, b)
+    keep = _matches_better(start, fitted, px, warp, _at(own, px.u, px.v), target)
+    keep &= _explains_codes(fitted, px, view, quant)
+    planes = np.where(keep[:, None], fitted, start)
+    info = {**mesh.info, "refined_quads": int(keep.sum())}
+    return QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel, info)
+
+
+def _check_inputs(mesh, view, other) -> None:
+    if not isinstance(mesh, QuadMesh):
+        raise TypeError(f"mesh: expected an ibr QuadMesh, got {type(mesh).__name__}")
+    for name, v in (("view", view), ("other", other)):
+        if not isinstance(v, View):
+            raise TypeError(f"{name}: expected an ibr View, got {type(v).__name__}")
+        v.require_depth("refine_planes")
+    if mesh.shape != view.shape:
+        raise ValueError(f"mesh: its shape {mesh.shape} differs from view's {view.shape}; "
+                         "pass the view the mesh was built from")
+    if _channels(view) != _channels(other):
+        raise ValueError(f"other: {_channels(other)} colour channels, view has {_channels(view)}; "
+                         "the planes are fitted by comparing their colours")
+
+
+def _channels(view: View) -> int:
+    return 1 if view.color.ndim == 2 else min(view.color.shape[2], 3)
+
+
+class _Pixels:
+    """The interior pixels of the quads to refine: (u, v) float64, quad index ``qi``, and the
+    homogeneous pixel vectors ``x = (u, v, 1)`` (N, 3)."""
+
+    def __init__(self, u, v, qi, n_quads):
+        self.u, self.v, self.qi, self.n_quads = u, v, qi, n_quads
+        self.x = np.stack([u, v, np.ones_like(u)], 1)
+
+    def per_quad(self, values) -> np.ndarray:
+        """Sum of per-pixel ``values`` over each quad, (Q,)."""
+        return np.bincount(self.qi, values, minlength=self.n_quads)
+
+
+def _interior_pixels(mesh: QuadMesh) -> _Pixels:
+    """Pixels of quads of :data:`MIN_AREA` or more whose 3 x 3 neighbourhood lies in their own
+    quad (the quad's border pixels may mix in the neighbouring surface's colour)."""
+    r = mesh.rects
+    large = np.append((r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1]) >= MIN_AREA, False)  # index -1: no quad
+    ids = mesh.quad_of_pixel.astype(np.float32)  # exact for any quad count a mesh can have (< 2^24)
+    box = np.ones((3, 3), np.uint8)
+    inside = cv2.erode(ids, box) == cv2.dilate(ids, box)
+    v, u = np.nonzero(inside & large[mesh.quad_of_pixel])
+    return _Pixels(u.astype(np.float64), v.astype(np.float64), mesh.quad_of_pixel[v, u], len(r))
+
+
+class _PlaneWarp:
+    """Where the pixels of a plane of the source land in the other camera.
+
+    A source pixel ``x = (u, v, 1)`` on the plane ``1/z = p . x`` is the point ``K_s^-1 x / (p . x)``;
+    in the other camera ``w = A x + s (p . x)`` (homogeneous, scaled by ``p . x``) with
+    ``A = K_o R K_s^-1`` and ``s = K_o t`` for the relative pose ``(R, t)``: the plane-induced
+    homography ``A + s p^T``. The other camera's depth of the point is ``w_2 / (p . x)``.
+    """
+
+    def __init__(self, source, other, other_depth, quant):
+        rel = other.cam_from_world @ source.world_from_cam
+        self.A = other.K @ rel[:3, :3] @ np.linalg.inv(source.K)
+        self.s = other.K @ rel[:3, 3]
+        z = np.asarray(other_depth, np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.q_other = np.where(np.isfinite(z) & (z > 0), 1.0 / z, 0.0)
+        self.quant = quant
+        self.h, self.w = z.shape
+
+    def project(self, planes, px: _Pixels):
+        """(u', v') in the other camera, the homogeneous ``w`` (N, 3), and whether the other
+        camera sees the point: inside its image (1 px margin for the gradient) and not behind
+        its depth there by more than 2 % plus one code (its depth is quantized too)."""
+        q = np.einsum("ij,ij->i", planes[px.qi], px.x)
+        w = px.x @ self.A.T + self.s[None] * q[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uo, vo = w[:, 0] / w[:, 2], w[:, 1] / w[:, 2]
+            ok = (w[:, 2] > 0) & (q > 0) & (uo > 1) & (uo < self.w - 2) & (vo > 1) & (vo < self.h - 2)
+        uo, vo = np.where(ok, uo, -10.0), np.where(ok, vo, -10.0)
+        q_seen = self.q_other[np.clip(np.rint(vo), 0, self.h - 1).astype(np.intp),
+                              np.clip(np.rint(uo), 0, self.w - 1).astype(np.intp)]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            q_point = q / w[:, 2]  # 1/z of the point in the other camera
+        ok &= q_point >= q_seen * 0.98 - self.quant.inv_step(q_seen)
+        return uo, vo, w, ok
+
+
+def _at(image, u, v) -> np.ndarray:
+    """Bilinear samples (N, C) float32 of ``image`` (H, W, C) at (u, v), NaN outside
+    (``cv2.remap`` on rows of 1024 samples: its maps must be narrower than 32767)."""
+    n, width = len(u), 1024
+    rows = max(1, -(-n // width))
+    pad = rows * width - n
+    mu = np.pad(np.asarray(u, np.float32), (0, pad)).reshape(rows, width)
+    mv = np.pad(np.asarray(v, np.float32), (0, pad)).reshape(rows, width)
+    out = []
+    for c0 in range(0, image.shape[2], 3):  # remap takes at most four channels
+        part = cv2.remap(np.ascontiguousarray(image[..., c0:c0 + 3]), mu, mv, cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_CONSTANT, borderValue=(np.nan,) * 4)
+        out.append(part.reshape(rows * width, -1)[:n])
+    return np.concatenate(out, 1)
+
+
+def _gauss_newton_step(planes, px: _Pixels, warp: _PlaneWarp, own_px, other) -> np.ndarray:
+    """One damped, Huber-weighted Gauss-Newton step of every quad's plane: residual
+    ``r = I_other(H_p x) - I_own(x)``; its derivative by the plane is ``g x`` with
+    ``g = grad I_other . d(u', v')/dw . s`` (the homography moves points along ``s``)."""
+    gx = cv2.Sobel(other, cv2.CV_32F, 1, 0, ksize=3) / 8
+    gy = cv2.Sobel(other, cv2.CV_32F, 0, 1, ksize=3) / 8
+    uo, vo, w, ok = warp.project(planes, px)
+    samples = _at(np.concatenate([other, gx, gy], 2), uo, vo)
+    c = own_px.shape[1]
+    r = samples[:, :c] - own_px
+    ok &= np.isfinite(r).all(1)
+    du = (warp.s[0] - warp.s[2] * uo) / w[:, 2]  # d u' along s: (s0 w2 - s2 w0) / w2^2
+    dv = (warp.s[1] - warp.s[2] * vo) / w[:, 2]
+    g = samples[:, c:2 * c] * du[:, None] + samples[:, 2 * c:] * dv[:, None]
+    weight = np.where(np.abs(r) <= HUBER, 1.0, HUBER / np.maximum(np.abs(r), 1e-12)) * ok[:, None]
+    gg = np.nan_to_num((weight * g * g).sum(1))
+    gr = np.nan_to_num((weight * g * r).sum(1))
+    normal = np.empty((px.n_quads, 3, 3))
+    rhs = np.empty((px.n_quads, 3))
+    for i in range(3):
+        rhs[:, i] = px.per_quad(gr * px.x[:, i])
+        for j in range(i, 3):
+            normal[:, i, j] = normal[:, j, i] = px.per_quad(gg * px.x[:, i] * px.x[:, j])
+    diag = np.diagonal(normal, axis1=1, axis2=2)
+    normal += (DAMPING * diag)[:, :, None] * np.eye(3) + 1e-12 * np.eye(3)
+    step = -np.linalg.solve(normal, rhs[..., None])[..., 0]
+    step[(px.per_quad(ok) < MIN_VISIBLE) | ~np.isfinite(step).all(1)] = 0.0
+    return planes + step
+
+
+def _robust_cost(planes, px: _Pixels, warp: _PlaneWarp, own_px, other):
+    """Per-pixel Huber cost of the colour residual (summed over channels) and visibility."""
+    uo, vo, _, ok = warp.project(planes, px)
+    r = np.abs(_at(other, uo, vo) - own_px)
+    ok &= np.isfinite(r).all(1)
+    rho = np.where(r <= HUBER, 0.5 * r * r, HUBER * (r - 0.5 * HUBER)).sum(1)
+    return np.where(ok, rho, 0.0), ok
+
+
+def _matches_better(start, fitted, px: _Pixels, warp: _PlaneWarp, own_px, other) -> np.ndarray:
+    """(Q,) bool: quads whose fitted plane has the lower robust cost over the pixels both planes
+    let the other camera see, where those are at least half of the quad's refined pixels."""
+    rho0, ok0 = _robust_cost(start, px, warp, own_px, other)
+    rho1, ok1 = _robust_cost(fitted, px, warp, own_px, other)
+    both = ok0 & ok1
+    seen = px.per_quad(both)
+    return (px.per_quad(rho1 * both) < px.per_quad(rho0 * both)) & (seen >= 0.5 * px.per_quad(np.ones(len(px.qi))))
+
+
+def _explains_codes(planes, px: _Pixels, view: View, quant: DepthQuantization) -> np.ndarray:
+    """(Q,) bool: quads whose plane stays within half a code plus :data:`TOLERANCE_CODES` of
+    every refined pixel's stored inverse depth."""
+    stored = 1.0 / np.asarray(view.depth, np.float64)[px.v.astype(np.intp), px.u.astype(np.intp)]
+    q = np.einsum("ij,ij->i", planes[px.qi], px.x)
+    outside = np.abs(q - stored) > quant.inv_step(stored) * (0.5 + TOLERANCE_CODES)
+    return px.per_quad(outside) == 0
