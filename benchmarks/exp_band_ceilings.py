@@ -1,0 +1,85 @@
+"""Experiment (issue 11, not in the library): ceilings of the edge-band targets (32 / 34 dB).
+
+Edge band PSNR (bench_edges.edge_band, t = .25/.5/.75) of
+
+1. the scene itself ray traced into each truth camera with k x k samples per pixel (a box
+   filter; the truths are k = 3) and with the antialias option's pattern (the centre counted
+   twice and four diagonal subsamples at +-1/3 px): what perfect geometry and colour give;
+2. ``interpolate(..., supersample=3)`` with the sources' upsampling replaced by perfect 3x
+   sources: the scene's exact depth at 3x with the upsampled colour, then exact depth and colour
+   (3x3 supersampled at 3x): what this renderer gives from perfect sources.
+
+Usage (from the repository root): ``python benchmarks/exp_band_ceilings.py`` (about 2 minutes).
+docs/edges.md section 1 ("Ceilings of the band targets") has the figures (2026-11-26).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]
+import bench_edges as be  # noqa: E402
+import ibr.render.upsample as upsample  # noqa: E402
+from ibr.render.view_synthesis import interpolate  # noqa: E402
+from ibr.synth import make_scene, render  # noqa: E402
+from ibr.synth.scene import _camera_dirs  # noqa: E402
+
+
+def traced(scene, camera, du=0.0, dv=0.0):
+    """(H, W, 3) colour in levels of the rays through pixel centres moved by (du, dv) px."""
+    return scene.trace(camera.position, _camera_dirs(camera, du, dv)).color.reshape(camera.height, camera.width, 3) * 255
+
+
+def perfect_renderers(name, scene, truths):
+    rows = {}
+    for g in truths:
+        band = be.edge_band(g.depth)
+        for k in (1, 2, 4):
+            c = render(scene, g.camera, supersample=k).color * 255
+            rows.setdefault(f"ray traced, {k}x{k} box", []).append(be.psnr(np.rint(c), g.color, band))
+        d = 1 / 3
+        pattern = 2 * traced(scene, g.camera) + sum(traced(scene, g.camera, su * d, sv * d) for su in (-1, 1) for sv in (-1, 1))
+        rows.setdefault("ray traced, antialias pattern", []).append(be.psnr(np.rint(pattern / 6), g.color, band))
+    return rows
+
+
+def perfect_sources(name, scene, truths):
+    rows, original = {}, upsample.upsample_view
+    cams = [g.camera for g in truths]
+    for label, colour_k in (("supersample=3, exact 3x depth", None), ("supersample=3, exact 3x depth + colour", 3)):
+        def exact(view, k, colour_k=colour_k):
+            up = original(view, k)
+            big = render(scene, view.camera.resized(view.camera.width * k, view.camera.height * k),
+                         supersample=colour_k or 1)
+            color = up.color if colour_k is None else np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype)
+            return dataclasses.replace(up, depth=big.depth, color=color)
+
+        upsample.upsample_view = exact
+        try:
+            a, b, _ = be.load_pair(name)  # fresh views: nothing cached
+            frames = interpolate(a, b, cams, fill="none", supersample=3)
+        finally:
+            upsample.upsample_view = original
+        rows[label] = be.edge_scores(frames, truths)[0]
+    a, b, _ = be.load_pair(name)
+    rows["supersample=3 (today)"] = be.edge_scores(interpolate(a, b, cams, fill="none", supersample=3), truths)[0]
+    return rows
+
+
+def main() -> int:
+    print(f"{'scene':<8} {'renderer':<42} {'edge band dB (t = .25/.5/.75)':<30} {'mean':>6}")
+    for name in ("clutter", "room"):
+        _, _, truths = be.load_pair(name)
+        scene = make_scene(name)
+        for rows in (perfect_renderers(name, scene, truths), perfect_sources(name, scene, truths)):
+            for label, band in rows.items():
+                print(f"{name:<8} {label:<42} {' '.join(f'{x:.2f}' for x in band):<30} {np.mean(band):6.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
