@@ -390,7 +390,7 @@ def run(args) -> int:
         sheet = plan.add_file("--contact-sheet", args.contact_sheet, (".png", ".jpg", ".jpeg", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
         # imported after cli.main started the first-run helper: numba's import (0.3 s) overlaps it
-        from ibr.render.view_synthesis import iter_interpolate, source_mesh
+        from ibr.render.view_synthesis import interpolation_meshes, iter_interpolate
 
         view_a, view_b = _check_pair(path_a, load_view(path_a), path_b, load_view(path_b), args.method)
         # the inputs read: say that numba compiles (not before a view without depth is refused)
@@ -400,10 +400,13 @@ def run(args) -> int:
 
         if args.method == "mesh" and args.supersample == 1:  # supersampled: meshes of the upsampled
             t0 = time.perf_counter()                           # sources, built with the first frame
-            mesh_a, mesh_b = source_mesh(view_a), source_mesh(view_b)
-            info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads, built in {(time.perf_counter() - t0) * 1e3:.1f} ms "
-                 f"(once, {'compiling' if compiling else 'loading'} the segmentation kernels included; reused for "
-                 "every frame)")
+            mesh_a, mesh_b = interpolation_meshes(view_a, view_b, ts)
+            fitted = [m.info.get("refined_quads", 0) for m in (mesh_a, mesh_b)]
+            fitted = (f" (coarse depth codes: planes of {fitted[0]} + {fitted[1]} large quads fitted to the other "
+                      "view's colour)") if any(fitted) else ""
+            info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads{fitted}, built in "
+                 f"{(time.perf_counter() - t0) * 1e3:.1f} ms (once, {'compiling' if compiling else 'loading'} the "
+                 "segmentation kernels included; reused for every frame)")
 
         frames_iter = iter_interpolate(view_a, view_b, ts, method=args.method, composite_mode=args.composite,
                                        fill=args.fill, interpolation=args.interpolation,

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -12,7 +14,8 @@ from ibr.io import load_view
 from ibr.mesh import build_mesh
 from ibr.mesh.quad_mesh import mesh_depth
 from ibr.render.plane_refine import COARSE_PX, is_coarse, refine_planes
-from ibr.render.view_synthesis import interpolate
+import cli
+from ibr.render.view_synthesis import _source, interpolate, interpolation_meshes
 from ibr.synth import make_scene, render, scene_cameras
 from samples import DATA_DIR
 
@@ -136,3 +139,49 @@ def test_bad_input_is_refused_by_name(plane_pair):
         refine_planes(mesh, small, cb)
     with pytest.raises(ValueError, match="other: 1 colour channels"):
         refine_planes(mesh, ca, View(cb.color[..., 0], cb.depth, cb.camera, "grey"))
+
+
+def _write_8bit_disparity_pair(folder, views, bf: float) -> list:
+    """View files whose depth is an 8-bit PNG of integer disparity codes (like Middlebury's),
+    for which load_view records a one-code quantization."""
+    from ibr.io import write_image
+
+    paths = []
+    for v, n in zip(views, ("a", "b")):
+        write_image(folder / f"{n}.png", v.color)
+        write_image(folder / f"{n}_disp.png", np.rint(bf / v.depth).astype(np.uint8))
+        doc = {"format": "ibr-view", "version": 1, "name": n, "color": f"{n}.png", "camera": v.camera.to_dict(),
+               "depth": {"path": f"{n}_disp.png", "encoding": "disparity", "baseline": bf / v.camera.fx,
+                         "focal_px": v.camera.fx, "doffs": 0.0, "scale": 1.0}}
+        (folder / f"{n}.json").write_text(json.dumps(doc))
+        paths.append(folder / f"{n}.json")
+    return paths
+
+
+def test_the_meshes_interpolate_uses_are_built_up_front_and_say_what_was_fitted(plane_pair, tmp_path, capsys):
+    """``interpolation_meshes`` builds the meshes ``interpolate`` then renders with (nothing new
+    is built by the frames); a view file in 8-bit disparity codes gets its planes fitted, exact
+    depth does not; the command line says so."""
+    a, b, _, _, bf = plane_pair
+    pa, pb = _write_8bit_disparity_pair(tmp_path, (a, b), bf)
+    va, vb = load_view(pa), load_view(pb)
+    meshes = interpolation_meshes(va, vb, [0.25, 0.5])
+    assert [m.info["refined_quads"] for m in meshes] == [1, 1]
+    cached = [len(_source(v).meshes) for v in (va, vb)]
+    interpolate(va, vb, [0.25, 0.5], fill="none")
+    assert [len(_source(v).meshes) for v in (va, vb)] == cached
+    assert all("refined_quads" not in m.info for m in interpolation_meshes(a, b, 0.5))
+    assert cli.main(["interpolate", str(pa), str(pb), "--t", "0.5", "--out", str(tmp_path / "out")]) == 0
+    assert "planes of 1 + 1 large quads fitted to the other view's colour" in capsys.readouterr().err
+
+
+def test_interpolation_meshes_refuses_what_interpolate_refuses(plane_pair):
+    a, b, _, _, _ = plane_pair
+    with pytest.raises(TypeError, match="view_a"):
+        interpolation_meshes(a.color, b, 0.5)
+    with pytest.raises(ValueError, match="lod"):
+        interpolation_meshes(a, b, 0.5, lod="far")
+    with pytest.raises(ValueError, match="mesh_options"):
+        interpolation_meshes(a, b, 0.5, mesh_options={"max_eror_px": 1})
+    with pytest.raises(ValueError, match="t: "):
+        interpolation_meshes(a, b, [])

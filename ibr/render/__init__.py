@@ -29,6 +29,7 @@ _EXPORTS = {
     "Rendering": "view_synthesis",
     "interpolate": "view_synthesis",
     "iter_interpolate": "view_synthesis",
+    "interpolation_meshes": "view_synthesis",
     "source_mesh": "view_synthesis",
     "warp": "view_synthesis",
     "viewpoint_weights": "composite",

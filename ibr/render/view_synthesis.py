@@ -43,6 +43,7 @@ __all__ = [
     "METHODS",
     "Rendering",
     "interpolate",
+    "interpolation_meshes",
     "iter_interpolate",
     "lod_baseline",
     "source_mesh",
@@ -817,13 +818,44 @@ def iter_interpolate(
     base = check_mesh_options(mesh_options)
     if k > 1:  # the sources at k x k their resolution, sub-pixel silhouettes (ibr.render.upsample)
         view_a, view_b = _source(view_a).upsampled(k), _source(view_b).upsampled(k)
-    # level of detail from the span of the whole call (one mesh per source for every frame)
-    opts = [_lod_options(v, cams, base, lod) if method == "mesh" else {} for v in (view_a, view_b)]
-    if method == "mesh" and k == 1:  # coarse depth codes: large quads fitted to the other source
-        opts = _with_partners([view_a, view_b], opts)
+    opts = _pair_mesh_options(view_a, view_b, cams, base, lod, partners=k == 1) if method == "mesh" else [{}, {}]
     return _frames(view_a, view_b, cams, ts, k, opts, method=method, footprint=footprint, splat=splat,
                    interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
                    silhouettes=silhouettes, fill=fill, antialias=antialias)
+
+
+def _pair_mesh_options(view_a, view_b, cams, mesh_options: dict, lod: str, *, partners: bool = True) -> list[dict]:
+    """Each source's mesh options for rendering ``cams``: the level of detail from the span of
+    the whole call (one mesh per source for every frame) and, with ``partners``, the other source
+    where the depth's codes are coarse (:func:`_with_partners`)."""
+    opts = [_lod_options(v, cams, mesh_options, lod) for v in (view_a, view_b)]
+    return _with_partners([view_a, view_b], opts) if partners else opts
+
+
+def interpolation_meshes(view_a: View, view_b: View, t, *, mesh_options: dict | None = None,
+                         lod: str = "move") -> tuple:
+    """The quad meshes of both sources that :func:`interpolate` renders ``t`` with (method
+    ``"mesh"``, no supersampling), built now and cached for it, so that a caller can time them
+    apart from the frames.
+
+    Parameters
+    ----------
+    view_a, view_b, t, mesh_options, lod
+        As in :func:`interpolate`.
+
+    Returns
+    -------
+    (QuadMesh, QuadMesh)
+        Where a source's depth is coarsely quantized (:mod:`ibr.render.plane_refine`), its mesh
+        has its large quads fitted to the other source's colour; ``mesh.info["refined_quads"]``
+        counts the planes that changed.
+    """
+    check_choice("lod", lod, LODS)
+    _check_source(view_a, "view_a")
+    _check_source(view_b, "view_b")
+    cams, _, _ = _targets(view_a, view_b, t)
+    opts = _pair_mesh_options(view_a, view_b, cams, check_mesh_options(mesh_options), lod)
+    return tuple(source_mesh(v, **o) for v, o in zip((view_a, view_b), opts))
 
 
 def _frames(view_a, view_b, cams, ts, k, opts, *, method, footprint, splat, interpolation, composite_mode,
