@@ -185,3 +185,8 @@ def test_interpolation_meshes_refuses_what_interpolate_refuses(plane_pair):
         interpolation_meshes(a, b, 0.5, mesh_options={"max_eror_px": 1})
     with pytest.raises(ValueError, match="t: "):
         interpolation_meshes(a, b, [])
+    small = View(b.color[:60, :80], b.depth[:60, :80], b.camera.resized(80, 60), "small")
+    with pytest.raises(ValueError, match="view_b: size 80x60 differs"):
+        interpolation_meshes(a, small, 0.5)
+    with pytest.raises(ValueError, match="view_b: size 80x60 differs"):
+        interpolate(a, small, 0.5)

@@ -802,6 +802,19 @@ def iter_interpolate(
     depth_tol = check_positive("depth_tol", depth_tol)
     k = check_supersample(supersample)
     interpolation = _at_supersampling(interpolation, k)
+    _check_pair(view_a, view_b, method)
+    cams, ts, _ = _targets(view_a, view_b, t)
+    base = check_mesh_options(mesh_options)
+    if k > 1:  # the sources at k x k their resolution, sub-pixel silhouettes (ibr.render.upsample)
+        view_a, view_b = _source(view_a).upsampled(k), _source(view_b).upsampled(k)
+    opts = _pair_mesh_options(view_a, view_b, cams, base, lod, partners=k == 1) if method == "mesh" else [{}, {}]
+    return _frames(view_a, view_b, cams, ts, k, opts, method=method, footprint=footprint, splat=splat,
+                   interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
+                   silhouettes=silhouettes, fill=fill, antialias=antialias)
+
+
+def _check_pair(view_a, view_b, method: str = "mesh") -> None:
+    """The two sources of an interpolation: views with depth of one size, colour dtype and layout."""
     _check_source(view_a, "view_a", method)
     _check_source(view_b, "view_b", method)
     if view_a.shape != view_b.shape:
@@ -814,14 +827,6 @@ def iter_interpolate(
             f"view_b: color {view_b.color.dtype} {view_b.color.shape} differs from view_a's "
             f"{view_a.color.dtype} {view_a.color.shape}; convert both to one dtype and layout"
         )
-    cams, ts, _ = _targets(view_a, view_b, t)
-    base = check_mesh_options(mesh_options)
-    if k > 1:  # the sources at k x k their resolution, sub-pixel silhouettes (ibr.render.upsample)
-        view_a, view_b = _source(view_a).upsampled(k), _source(view_b).upsampled(k)
-    opts = _pair_mesh_options(view_a, view_b, cams, base, lod, partners=k == 1) if method == "mesh" else [{}, {}]
-    return _frames(view_a, view_b, cams, ts, k, opts, method=method, footprint=footprint, splat=splat,
-                   interpolation=interpolation, composite_mode=composite_mode, depth_tol=depth_tol,
-                   silhouettes=silhouettes, fill=fill, antialias=antialias)
 
 
 def _pair_mesh_options(view_a, view_b, cams, mesh_options: dict, lod: str, *, partners: bool = True) -> list[dict]:
@@ -851,8 +856,7 @@ def interpolation_meshes(view_a: View, view_b: View, t, *, mesh_options: dict | 
         counts the planes that changed.
     """
     check_choice("lod", lod, LODS)
-    _check_source(view_a, "view_a")
-    _check_source(view_b, "view_b")
+    _check_pair(view_a, view_b)
     cams, _, _ = _targets(view_a, view_b, t)
     opts = _pair_mesh_options(view_a, view_b, cams, check_mesh_options(mesh_options), lod)
     return tuple(source_mesh(v, **o) for v, o in zip((view_a, view_b), opts))
