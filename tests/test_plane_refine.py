@@ -100,6 +100,12 @@ def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
     assert not is_coarse(DepthQuantization.codes(0.001), 3.0, base, f)
     assert is_coarse(DepthQuantization.codes(0.001), 3.0, 3.0**2 / 0.001 * COARSE_PX / f * 1.01, f)
     assert not is_coarse(None, 3.0, base, f)
+    for args, match in (((None, 0.0, base, f), "depth"), ((None, 3.0, -1.0, f), "baseline"),
+                        ((None, 3.0, base, np.nan), "focal_px")):
+        with pytest.raises(ValueError, match=match):
+            is_coarse(*args)
+    with pytest.raises(TypeError, match="quantization"):
+        is_coarse(0.5, 3.0, base, f)
 
 
 def test_room_in_8bit_disparity_renders_within_0_3_db_of_its_exact_depth():

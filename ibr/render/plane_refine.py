@@ -29,6 +29,7 @@ import cv2
 import numpy as np
 
 from ..base.depth import DepthQuantization
+from ..base.validate import check_finite_scalar, check_positive
 from ..base.view import View
 from ..mesh.quad_mesh import QuadMesh
 from .upsample import _unit_color
@@ -65,8 +66,15 @@ def is_coarse(quantization: DepthQuantization | None, depth: float, baseline: fl
     """Whether one code of ``quantization`` at planar depth ``depth`` (e.g. a source's median)
     moves a point by at least :data:`COARSE_PX` pixels over a camera move of ``baseline``
     (scene units) at focal length ``focal_px``; ``False`` without a quantization."""
+    depth, focal_px = check_positive("depth", depth), check_positive("focal_px", focal_px)
+    baseline = check_finite_scalar("baseline", baseline)
+    if baseline < 0:
+        raise ValueError(f"baseline: expected a distance >= 0, got {baseline!r}")
     if quantization is None:
         return False
+    if not isinstance(quantization, DepthQuantization):
+        raise TypeError(f"quantization: expected an ibr.base.depth.DepthQuantization or None, got "
+                        f"{type(quantization).__name__}")
     return float(quantization.inv_step(1.0 / depth)) * focal_px * baseline >= COARSE_PX
 
 
