@@ -59,20 +59,21 @@ def test_a_plane_inside_one_disparity_code_is_found_from_the_other_view(plane_pa
 
 
 def test_what_the_other_view_sees_in_front_is_left_out(plane_pair):
-    """Hard case: a nearer object (noise colour) hides a third of the wall in the other view.
-    Its pixels are occluded there (its depth is nearer by more than a code) and take no part in
-    the fit: the plane is still found within 0.03 code. The same noise at the wall's depth
-    (nothing says it is not the wall) leaves the plane at its codes, a quarter code off."""
+    """Hard case: a nearer object hides 70 of the wall's 160 columns in the other view, and it
+    wears the wall's own texture 3 px to the side (a good match at the wrong depth). Its pixels
+    are occluded there (its depth nearer by more than a code) and take no part in the fit: the
+    plane is found within 0.03 code. At the wall's depth (nothing says it is not the wall) the
+    false match pulls the plane a quarter code off."""
     a, _, (ca, cb), q, bf = plane_pair
     color = cb.color.copy()
-    color[:, 50:100] = np.random.default_rng(0).integers(0, 256, color[:, 50:100].shape, dtype=np.uint8)
+    color[:, 40:110] = np.roll(cb.color, 3, axis=1)[:, 40:110]
     depth = cb.depth.copy()
-    depth[:, 50:100] = 1.0
+    depth[:, 40:110] = 1.0
     mesh = build_mesh(ca, quantization=q)
     occluded = refine_planes(mesh, ca, View(color, depth, cb.camera, "b occluded"))
     assert np.abs(_code_error(occluded, a, bf)).max() < 0.03
     unmarked = refine_planes(mesh, ca, View(color, cb.depth, cb.camera, "b painted"))
-    assert np.sqrt(np.mean(_code_error(unmarked, a, bf) ** 2)) > 0.2
+    assert np.sqrt(np.mean(_code_error(unmarked, a, bf) ** 2)) > 0.15
 
 
 def test_an_untextured_wall_keeps_its_code_plane(plane_pair):
@@ -110,7 +111,7 @@ def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
 
 def test_room_in_8bit_disparity_renders_within_0_3_db_of_its_exact_depth():
     """Issue 11's target on the bundled room pair re-encoded as 8-bit integer disparity (its own
-    baseline), t = .25/.5/.75, covered pixels: measured -0.24 dB (-0.40 with the code planes).
+    baseline), t = .25/.5/.75, covered pixels: measured -0.25 dB (-0.40 with the code planes).
     At a source's own pose the source comes back exactly."""
     a, b = load_view(DATA_DIR / "room_a.json"), load_view(DATA_DIR / "room_b.json")
     truths = [load_view(DATA_DIR / f"room_t{p:03d}.json") for p in (25, 50, 75)]

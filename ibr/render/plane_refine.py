@@ -5,18 +5,19 @@ tells a plane only to half a code: the least-squares plane on the codes of a wal
 inside one code is flat at the code, up to half a code (half a pixel of the pair's parallax) off
 the truth, and an interpolation then draws each source's texture a fraction of a pixel apart. The
 other source of an interpolation sees the same surfaces, so its colour says where the plane is.
-For every large quad of one source, :func:`refine_planes` fits the plane
-``1/z = a u + b v + c`` (the quad's own parametrisation, :class:`ibr.mesh.QuadMesh`) whose
-plane-induced homography maps the quad's interior pixels onto the other source's colour best:
-a robust (Huber) Gauss-Newton fit of three parameters, the Lucas-Kanade alignment of a plane
-(Baker & Matthews, "Lucas-Kanade 20 years on", 2004), first on blurred colour, then on the
-colour itself, pixels that the other source sees occluded left out. The fitted plane replaces the
+For every large quad of one source whose codes span at most two codes (wider ones are pinned
+by where their codes change), :func:`refine_planes` fits the plane ``1/z = a u + b v + c`` (the
+quad's own parametrisation, :class:`ibr.mesh.QuadMesh`) whose plane-induced homography maps the
+quad's interior pixels onto the other source's colour best, with one brightness offset per
+channel (the views' exposures may differ): a robust (Huber) Gauss-Newton fit, the Lucas-Kanade
+alignment of a plane (Baker & Matthews, "Lucas-Kanade 20 years on", 2004), first on blurred
+colour, then on the colour itself, pixels that the other source sees occluded left out. The fitted plane replaces the
 code plane only where it matches the other source better (robust cost over the pixels both
 planes see) and explains every code of the quad within :data:`TOLERANCE_CODES`; otherwise
 the quad keeps its plane (weak texture along the epipolar lines, occlusions, small quads).
 
 Measured (``python benchmarks/bench_edges.py --quick``, section 3: 8-bit disparity against the
-exact depth, covered pixels, t = .25/.5/.75): room -0.40 -> -0.24 dB, clutter -0.71 -> -0.56;
+exact depth, covered pixels, t = .25/.5/.75): room -0.40 -> -0.25 dB, clutter -0.71 -> -0.56;
 docs/edges.md section 3 has the other scenes and what was tried.
 
 Conventions: pixel centres at integer (u, v); planes in inverse planar depth per source pixel;
@@ -46,6 +47,9 @@ COARSE_PX = 0.25
 #: How far (codes, beyond the half code of rounding) a refined plane may leave a pixel's code:
 #: a quad's plane also approximates a curved surface (room -0.30 dB at 0.5, -0.27 at 1.0).
 TOLERANCE_CODES = 1.0
+#: Only quads whose stored codes span at most this many codes are fitted (wider ones are
+#: pinned by their code changes).
+SPAN_CODES = 2
 #: Huber threshold of the colour residual, of full scale.
 HUBER = 8 / 255
 #: Levenberg-Marquardt damping, relative to the normal matrix's diagonal.
@@ -100,19 +104,19 @@ def refine_planes(mesh: QuadMesh, view: View, other: View) -> QuadMesh:
     quant = mesh.info.get("quantization")
     if quant is None:
         return mesh
-    px = _interior_pixels(mesh)
+    px = _interior_pixels(mesh, _ambiguous_quads(mesh, view.depth, quant))
     if len(px.qi) == 0:
         return mesh
     warp = _PlaneWarp(view.camera, other.camera, other.depth, quant)
     own, target = _unit_color(view.color).astype(np.float32), _unit_color(other.color).astype(np.float32)
     start = mesh.inv_depth_planes
-    fitted = start.copy()
-    for sigma, n in zip((BLUR_SIGMA, 0.0), ITERATIONS):
+    fitted, offsets = start.copy(), np.zeros((len(start), own.shape[2]))
+    for sigma, n in zip((BLUR_SIGMA, 0.0), ITERATIONS):  # coarse to fine
         a, b = (cv2.GaussianBlur(c, (0, 0), sigma) for c in (own, target)) if sigma else (own, target)
-        a_px, b_grad = _at(a, px.u, px.v), _with_gradients(b)
+        a_px, b_grad = _at(a.reshape(own.shape), px.u, px.v), _with_gradients(b.reshape(target.shape))
         for _ in range(n):
-            fitted = _gauss_newton_step(fitted, px, warp, a_px, b_grad)
-    keep = _matches_better(start, fitted, px, warp, _at(own, px.u, px.v), target)
+            fitted, offsets = _gauss_newton_step(fitted, offsets, px, warp, a_px, b_grad)
+    keep = _matches_better(start, fitted, offsets, px, warp, _at(own, px.u, px.v), target)
     keep &= _explains_codes(fitted, px, view, quant)
     planes = np.where(keep[:, None], fitted, start)
     info = {**mesh.info, "refined_quads": int(keep.sum())}
@@ -151,15 +155,33 @@ class _Pixels:
         return np.bincount(self.qi, values, minlength=self.n_quads)
 
 
-def _interior_pixels(mesh: QuadMesh) -> _Pixels:
-    """Pixels of quads of :data:`MIN_AREA` or more whose 3 x 3 neighbourhood lies in their own
-    quad (the quad's border pixels may mix in the neighbouring surface's colour)."""
+def _ambiguous_quads(mesh: QuadMesh, depth, quant: DepthQuantization) -> np.ndarray:
+    """(Q + 1,) bool (the last entry, for pixels without a quad, False): quads of :data:`MIN_AREA`
+    pixels or more whose stored codes span at most :data:`SPAN_CODES` codes. A plane across
+    more codes is pinned by where they change (a tilted plane's least-squares fit on 12 codes is
+    within 0.01 code); on the real motorcycle pair (its disparity rounded to integers) fitting those
+    to the colour moved them off the ground truth (0.065 -> 0.32 px rms)."""
+    r, qop = mesh.rects, mesh.quad_of_pixel
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = 1.0 / np.asarray(depth, np.float64)
+    valid = (qop >= 0) & np.isfinite(q) & (q > 0)
+    code = q[valid] / quant.inv_step(q[valid])  # the code index (disparity, or z / step)
+    hi, lo = np.full(len(r), -np.inf), np.full(len(r), np.inf)
+    np.maximum.at(hi, qop[valid], code)
+    np.minimum.at(lo, qop[valid], code)
+    large = (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1]) >= MIN_AREA
+    return np.append(large & (hi - lo <= SPAN_CODES + 1e-6), False)
+
+
+def _interior_pixels(mesh: QuadMesh, quads) -> _Pixels:
+    """Pixels of the ``quads`` ((Q + 1,) bool, see :func:`_ambiguous_quads`) whose 3 x 3
+    neighbourhood lies in their own quad (the quad's border pixels may mix in the neighbouring
+    surface's colour)."""
     r = mesh.rects
-    large = np.append((r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1]) >= MIN_AREA, False)  # index -1: no quad
     ids = mesh.quad_of_pixel.astype(np.float32)  # exact for any quad count a mesh can have (< 2^24)
     box = np.ones((3, 3), np.uint8)
     inside = cv2.erode(ids, box) == cv2.dilate(ids, box)
-    v, u = np.nonzero(inside & large[mesh.quad_of_pixel])
+    v, u = np.nonzero(inside & quads[mesh.quad_of_pixel])
     qi = mesh.quad_of_pixel[v, u]
     # at most about MAX_PIXELS per quad: a random share of a larger one's (fixed seed)
     share = np.minimum(1.0, MAX_PIXELS / np.maximum(np.bincount(qi, minlength=len(r)), 1))[qi]
@@ -227,52 +249,67 @@ def _with_gradients(image) -> np.ndarray:
     return np.concatenate([image, gx.reshape(image.shape), gy.reshape(image.shape)], 2)
 
 
-def _gauss_newton_step(planes, px: _Pixels, warp: _PlaneWarp, own_px, other_grad) -> np.ndarray:
-    """One damped, Huber-weighted Gauss-Newton step of every quad's plane: residual
-    ``r = I_other(H_p x) - I_own(x)``; its derivative by the plane is ``g x`` with
-    ``g = grad I_other . d(u', v')/dw . s`` (the homography moves points along ``s``).
-    ``other_grad`` is :func:`_with_gradients` of the other view's colour."""
+def _gauss_newton_step(planes, offsets, px: _Pixels, warp: _PlaneWarp, own_px, other_grad):
+    """One damped, Huber-weighted Gauss-Newton step of every quad's plane and brightness offsets:
+    residual ``r_c = I_other,c(H_p x) - I_own,c(x) - offset_c`` per channel c; its derivative by
+    the plane is ``g_c x`` with ``g_c = grad I_other,c . d(u', v')/dw . s`` (the homography moves
+    points along ``s``), by ``offset_c`` it is -1. ``other_grad`` is :func:`_with_gradients` of
+    the other view's colour. Returns the new ``(planes, offsets)``."""
     uo, vo, w, ok = warp.project(planes, px)
     samples = _at(other_grad, uo, vo)
     c = own_px.shape[1]
-    r = samples[:, :c] - own_px
+    r = samples[:, :c] - own_px - offsets[px.qi]
     ok &= np.isfinite(r).all(1)
     du = (warp.s[0] - warp.s[2] * uo) / w[:, 2]  # d u' along s: (s0 w2 - s2 w0) / w2^2
     dv = (warp.s[1] - warp.s[2] * vo) / w[:, 2]
-    g = samples[:, c:2 * c] * du[:, None] + samples[:, 2 * c:] * dv[:, None]
+    g = np.nan_to_num(samples[:, c:2 * c] * du[:, None] + samples[:, 2 * c:] * dv[:, None])
+    r = np.where(ok[:, None], r, 0.0)
     weight = np.where(np.abs(r) <= HUBER, 1.0, HUBER / np.maximum(np.abs(r), 1e-12)) * ok[:, None]
-    gg = np.nan_to_num((weight * g * g).sum(1))
-    gr = np.nan_to_num((weight * g * r).sum(1))
-    normal = np.empty((px.n_quads, 3, 3))
-    rhs = np.empty((px.n_quads, 3))
+    n = 3 + c  # unknowns per quad: the plane (a, b, c) and one offset per channel
+    normal = np.zeros((px.n_quads, n, n))
+    rhs = np.zeros((px.n_quads, n))
+    gg, gr = (weight * g * g).sum(1), (weight * g * r).sum(1)
     for i in range(3):
         rhs[:, i] = px.per_quad(gr * px.x[:, i])
         for j in range(i, 3):
             normal[:, i, j] = normal[:, j, i] = px.per_quad(gg * px.x[:, i] * px.x[:, j])
+    for ch in range(c):
+        rhs[:, 3 + ch] = -px.per_quad(weight[:, ch] * r[:, ch])
+        normal[:, 3 + ch, 3 + ch] = px.per_quad(weight[:, ch])
+        for i in range(3):
+            normal[:, i, 3 + ch] = normal[:, 3 + ch, i] = -px.per_quad(weight[:, ch] * g[:, ch] * px.x[:, i])
     diag = np.diagonal(normal, axis1=1, axis2=2)
-    normal += (DAMPING * diag)[:, :, None] * np.eye(3) + 1e-12 * np.eye(3)
+    normal += (DAMPING * diag)[:, :, None] * np.eye(n) + 1e-12 * np.eye(n)
     step = -np.linalg.solve(normal, rhs[..., None])[..., 0]
     step[(px.per_quad(ok) < MIN_VISIBLE) | ~np.isfinite(step).all(1)] = 0.0
-    return planes + step
+    return planes + step[:, :3], offsets + step[:, 3:]
 
 
-def _robust_cost(planes, px: _Pixels, warp: _PlaneWarp, own_px, other):
-    """Per-pixel Huber cost of the colour residual (summed over channels) and visibility."""
+def _residuals(planes, px: _Pixels, warp: _PlaneWarp, own_px, other):
+    """(N, C) colour residuals ``I_other(H_p x) - I_own(x)`` and the pixels the other sees."""
     uo, vo, _, ok = warp.project(planes, px)
-    r = np.abs(_at(other, uo, vo) - own_px)
+    r = _at(other, uo, vo) - own_px
     ok &= np.isfinite(r).all(1)
-    rho = np.where(r <= HUBER, 0.5 * r * r, HUBER * (r - 0.5 * HUBER)).sum(1)
-    return np.where(ok, rho, 0.0), ok
+    return np.where(ok[:, None], r, 0.0), ok
 
 
-def _matches_better(start, fitted, px: _Pixels, warp: _PlaneWarp, own_px, other) -> np.ndarray:
-    """(Q,) bool: quads whose fitted plane has the lower robust cost over the pixels both planes
-    let the other camera see, where those are at least half of the quad's refined pixels."""
-    rho0, ok0 = _robust_cost(start, px, warp, own_px, other)
-    rho1, ok1 = _robust_cost(fitted, px, warp, own_px, other)
+def _matches_better(start, fitted, offsets, px: _Pixels, warp: _PlaneWarp, own_px, other) -> np.ndarray:
+    """(Q,) bool: quads whose fitted plane (with its offsets) has the lower Huber cost over the
+    pixels both planes let the other camera see, where those are at least half of the quad's
+    fitted pixels; the start plane's offsets are its mean residuals there."""
+    r0, ok0 = _residuals(start, px, warp, own_px, other)
+    r1, ok1 = _residuals(fitted, px, warp, own_px, other)
     both = ok0 & ok1
     seen = px.per_quad(both)
-    return (px.per_quad(rho1 * both) < px.per_quad(rho0 * both)) & (seen >= 0.5 * px.per_quad(np.ones(len(px.qi))))
+    mean0 = np.stack([px.per_quad(r0[:, ch] * both) for ch in range(r0.shape[1])], 1) / np.maximum(seen, 1)[:, None]
+    cost0, cost1 = (px.per_quad(_huber(r - o[px.qi]) * both) for r, o in ((r0, mean0), (r1, offsets)))
+    return (cost1 < cost0) & (seen >= 0.5 * px.per_quad(np.ones(len(px.qi))))
+
+
+def _huber(r) -> np.ndarray:
+    """Huber cost of residuals (N, C), summed over channels."""
+    a = np.abs(r)
+    return np.where(a <= HUBER, 0.5 * a * a, HUBER * (a - 0.5 * HUBER)).sum(1)
 
 
 def _explains_codes(planes, px: _Pixels, view: View, quant: DepthQuantization) -> np.ndarray:
