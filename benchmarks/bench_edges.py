@@ -259,6 +259,12 @@ def section_motorcycle(repeats, classical):
     return r0, old_c, default.color
 
 
+def in_disparity_codes(views, bf: float) -> list:
+    """New views whose depth is re-encoded as integer disparity codes ``round(bf / z)`` (``bf`` =
+    baseline x focal length in px), like 8-bit Middlebury ground truth."""
+    return [View(v.color, (bf / np.rint(bf / v.depth)).astype(np.float32), v.camera, v.name) for v in views]
+
+
 @contextlib.contextmanager
 def code_planes():
     """Quads of quantized depth keep their least-squares planes on the codes (before the
@@ -293,8 +299,7 @@ def section_quantized():
         print(f"{name:<8} {'exact float depth':<44} {n0:6d} {1.0:8.2f} {p0:8.2f} {0.0:9.2f}   bilinear {l0:.2f}")
 
         def disparity_views():
-            return [View(v.color, (base * f / np.rint(base * f / v.depth)).astype(np.float32), v.camera, v.name)
-                    for v in (a, b)]
+            return in_disparity_codes((a, b), base * f)
 
         assert all(np.nanmax(base * f / v.depth) <= 255 for v in (a, b))
         mm = [View(v.color, (np.rint(v.depth * 1000) / 1000).astype(np.float32), v.camera, v.name) for v in (a, b)]
@@ -384,8 +389,7 @@ def picture_quantized(out_dir: Path):
     q = DepthQuantization.disparity(baseline=base, focal_px=f)
 
     def codes():
-        return [View(v.color, (base * f / np.rint(base * f / v.depth)).astype(np.float32), v.camera, v.name)
-                for v in (a, b)]
+        return in_disparity_codes((a, b), base * f)
 
     crops = [g.color, interpolate(a, b, g.camera, fill="none").color]
     with code_planes():

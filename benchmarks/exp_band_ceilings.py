@@ -34,7 +34,7 @@ def traced(scene, camera, du=0.0, dv=0.0):
     return scene.trace(camera.position, _camera_dirs(camera, du, dv)).color.reshape(camera.height, camera.width, 3) * 255
 
 
-def perfect_renderers(name, scene, truths):
+def perfect_renderers(scene, truths):
     rows = {}
     for g in truths:
         band = be.edge_band(g.depth)
@@ -75,7 +75,7 @@ def main() -> int:
     for name in ("clutter", "room"):
         _, _, truths = be.load_pair(name)
         scene = make_scene(name)
-        for rows in (perfect_renderers(name, scene, truths), perfect_sources(name, scene, truths)):
+        for rows in (perfect_renderers(scene, truths), perfect_sources(name, scene, truths)):
             for label, band in rows.items():
                 print(f"{name:<8} {label:<42} {' '.join(f'{x:.2f}' for x in band):<30} {np.mean(band):6.2f}")
     return 0

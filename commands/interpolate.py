@@ -401,9 +401,9 @@ def run(args) -> int:
         if args.method == "mesh" and args.supersample == 1:  # supersampled: meshes of the upsampled
             t0 = time.perf_counter()                           # sources, built with the first frame
             mesh_a, mesh_b = interpolation_meshes(view_a, view_b, ts)
-            fitted = [m.info.get("refined_quads", 0) for m in (mesh_a, mesh_b)]
-            fitted = (f" (coarse depth codes: planes of {fitted[0]} + {fitted[1]} large quads fitted to the other "
-                      "view's colour)") if any(fitted) else ""
+            n_fitted = [m.info.get("refined_quads", 0) for m in (mesh_a, mesh_b)]
+            fitted = (f" (coarse depth codes: planes of {n_fitted[0]} + {n_fitted[1]} large quads fitted to the "
+                      "other view's colour)") if any(n_fitted) else ""
             info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads{fitted}, built in "
                  f"{(time.perf_counter() - t0) * 1e3:.1f} ms (once, {'compiling' if compiling else 'loading'} the "
                  "segmentation kernels included; reused for every frame)")

@@ -8,14 +8,14 @@ import json
 import numpy as np
 import pytest
 
-from ibr.base.depth import DepthQuantization
+from ibr.base.depth import DepthQuantization, set_quantization
 from ibr.base.view import View
 from ibr.io import load_view
 from ibr.mesh import build_mesh
 from ibr.mesh.quad_mesh import mesh_depth
 from ibr.render.plane_refine import COARSE_PX, is_coarse, refine_planes
 import cli
-from ibr.render.view_synthesis import _source, interpolate, interpolation_meshes
+from ibr.render.view_synthesis import _holds_dead_ref, _source, interpolate, interpolation_meshes
 from ibr.synth import make_scene, render, scene_cameras
 from samples import DATA_DIR
 
@@ -76,20 +76,53 @@ def test_what_the_other_view_sees_in_front_is_left_out(plane_pair):
     assert np.sqrt(np.mean(_code_error(unmarked, a, bf) ** 2)) > 0.15
 
 
-def test_an_untextured_wall_keeps_its_code_plane(plane_pair):
-    """No texture, no information: the colour residual has no gradient and the plane stays."""
-    _, _, (ca, cb), q, _ = plane_pair
-    flat = [View(np.full_like(v.color, 128), v.depth, v.camera, v.name) for v in (ca, cb)]
-    mesh = build_mesh(flat[0], quantization=q)
-    refined = refine_planes(mesh, *flat)
-    assert refined.info["refined_quads"] == 0
-    assert np.array_equal(refined.inv_depth_planes, mesh.inv_depth_planes)
+def test_any_colour_layout_gives_the_same_plane(plane_pair):
+    """The colours are compared in units of their full scale: the wall in 16-bit grey, in float
+    RGBA and in 8-bit RGB is found alike (the Huber threshold and the offsets are scale-free)."""
+    a, _, (ca, cb), q, bf = plane_pair
+    mesh = build_mesh(ca, quantization=q)
+    grey16 = [View((v.color.mean(-1) * 257).astype(np.uint16), v.depth, v.camera, v.name) for v in (ca, cb)]
+    rgba = [View(np.dstack([v.color / 255.0, np.ones(v.depth.shape)]).astype(np.float32), v.depth, v.camera, v.name)
+            for v in (ca, cb)]
+    for views in ((ca, cb), grey16, rgba):
+        refined = refine_planes(mesh, *views)
+        assert refined.info["refined_quads"] == 1
+        assert np.abs(_code_error(refined, a, bf)).max() < 0.02
+
+
+def test_a_partner_that_is_gone_leaves_nothing_behind(plane_pair):
+    """The fitted mesh is cached on the source under a weak reference to its partner; once the
+    partner no longer exists, the next fitting forgets that mesh and what was derived from it."""
+    import gc
+
+    a, b, (ca, cb), q, bf = plane_pair
+    va = View(ca.color, ca.depth, ca.camera, "a")
+    set_quantization(va, q)
+
+    def pair_with_a_new_partner():
+        vb = View(cb.color, cb.depth, cb.camera, "b")
+        set_quantization(vb, q)
+        interpolate(va, vb, 0.5, fill="none")
+
+    def dead_keys():
+        src = _source(va)
+        return sum(_holds_dead_ref(k) for cache in (src.meshes, src._trust) for k in cache)
+
+    pair_with_a_new_partner()
+    gc.collect()
+    first = dead_keys()
+    assert first > 0  # the first partner's mesh, trust, sharp colour ...
+    for _ in range(2):
+        pair_with_a_new_partner()
+        gc.collect()
+        assert dead_keys() == first  # the last dead partner's entries only, not one more set per pair
 
 
 def test_exact_depth_is_left_as_it_is(plane_pair):
     a, b, _, _, _ = plane_pair
     mesh = build_mesh(a)
-    assert refine_planes(mesh, a, b) is mesh
+    refined = refine_planes(mesh, a, b)
+    assert refined.info["refined_quads"] == 0 and np.array_equal(refined.inv_depth_planes, mesh.inv_depth_planes)
 
 
 def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
@@ -142,8 +175,10 @@ def test_bad_input_is_refused_by_name(plane_pair):
     with pytest.raises(ValueError, match="depth"):
         refine_planes(mesh, ca, View(cb.color, None, cb.camera, "no depth"))
     small = View(ca.color[:60, :80], ca.depth[:60, :80], ca.camera.resized(80, 60), "small")
-    with pytest.raises(ValueError, match="mesh: its shape"):
+    with pytest.raises(ValueError, match="mesh: built for another camera"):
         refine_planes(mesh, small, cb)
+    with pytest.raises(ValueError, match="mesh: built for another camera"):
+        refine_planes(build_mesh(cb, quantization=q), ca, cb)
     with pytest.raises(ValueError, match="other: 1 colour channels"):
         refine_planes(mesh, ca, View(cb.color[..., 0], cb.depth, cb.camera, "grey"))
 

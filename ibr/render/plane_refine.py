@@ -13,8 +13,9 @@ channel (the views' exposures may differ): a robust (Huber) Gauss-Newton fit, th
 alignment of a plane (Baker & Matthews, "Lucas-Kanade 20 years on", 2004), first on blurred
 colour, then on the colour itself, pixels that the other source sees occluded left out. The fitted plane replaces the
 code plane only where it matches the other source better (robust cost over the pixels both
-planes see) and explains every code of the quad within :data:`TOLERANCE_CODES`; otherwise
-the quad keeps its plane (weak texture along the epipolar lines, occlusions, small quads).
+planes see) and explains the code of every pixel it was fitted on within :data:`TOLERANCE_CODES`;
+otherwise the quad keeps its plane (weak texture along the epipolar lines, occlusions, small
+quads). ``interpolate`` fits its two sources to each other unless it supersamples.
 
 Measured (``python benchmarks/bench_edges.py --quick``, section 3: 8-bit disparity against the
 exact depth, covered pixels, t = .25/.5/.75): room -0.40 -> -0.25 dB, clutter -0.71 -> -0.56;
@@ -29,26 +30,28 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..base.depth import DepthQuantization
+from ..base.depth import DepthQuantization, quantization_of
 from ..base.validate import check_finite_scalar, check_positive
 from ..base.view import View
 from ..mesh.quad_mesh import QuadMesh
+from .rasterize import src_from_tgt
 from .upsample import _unit_color
 
 __all__ = ["COARSE_PX", "MIN_AREA", "TOLERANCE_CODES", "is_coarse", "refine_planes"]
 
-#: Quads of at least this many pixels are refined: smaller ones hold too few pixels for a plane
-#: (on clutter, quads down to 20 px changed nothing: the fits did not match better).
+#: Quads of at least this many pixels are fitted: smaller ones hold too few pixels for a plane
+#: (full planes from 50 or 100 px: clutter -0.53 dB against -0.56; an offset alone for quads of
+#: 20-200 px: -0.50, but other scenes lost: docs/edges.md section 3).
 MIN_AREA = 200
 #: A source's depth is refined when one code moves a point at its median depth by at least this
 #: many pixels between the two cameras (8-bit disparity at the pair's baseline: 1 px; 16-bit
 #: millimetres at 3 m and 0.24 m: 0.01 px, left as it is).
 COARSE_PX = 0.25
-#: How far (codes, beyond the half code of rounding) a refined plane may leave a pixel's code:
-#: a quad's plane also approximates a curved surface (room -0.30 dB at 0.5, -0.27 at 1.0).
+#: How far (codes, beyond the half code of rounding) a fitted plane may leave a pixel's code:
+#: a quad's plane also approximates a curved surface (room -0.30 dB at 0.5, -0.25 at 1.0).
 TOLERANCE_CODES = 1.0
-#: Only quads whose stored codes span at most this many codes are fitted (wider ones are
-#: pinned by their code changes).
+#: Only quads whose stored codes lie within this many codes of each other (at most three
+#: distinct codes) are fitted: wider ones are pinned by where their codes change.
 SPAN_CODES = 2
 #: Huber threshold of the colour residual, of full scale.
 HUBER = 8 / 255
@@ -97,26 +100,29 @@ def refine_planes(mesh: QuadMesh, view: View, other: View) -> QuadMesh:
     Returns
     -------
     QuadMesh
-        Same rects and pixel map; planes of quads of :data:`MIN_AREA` pixels or more replaced
-        where the fit matched ``other`` better and explains the quad's codes (module docstring).
+        Same rects and pixel map; planes of quads of :data:`MIN_AREA` pixels or more within
+        :data:`SPAN_CODES` codes replaced where the fit matched ``other`` better and explains the
+        codes (module docstring); ``info["refined_quads"]`` counts them (0 without a
+        quantization).
     """
     _check_inputs(mesh, view, other)
     quant = mesh.info.get("quantization")
-    if quant is None:
-        return mesh
-    px = _interior_pixels(mesh, _ambiguous_quads(mesh, view.depth, quant))
-    if len(px.qi) == 0:
-        return mesh
-    warp = _PlaneWarp(view.camera, other.camera, other.depth, quant)
+    px = _interior_pixels(mesh, _quads_to_fit(mesh, view.depth, quant)) if quant is not None else None
+    if px is None or len(px.qi) == 0:
+        return QuadMesh(mesh.camera, mesh.rects, mesh.inv_depth_planes, mesh.quad_of_pixel,
+                        {**mesh.info, "refined_quads": 0})
+    other_quant = quantization_of(other)
+    warp = _PlaneWarp(view.camera, other.camera, other.depth, quant if other_quant is None else other_quant)
     own, target = _unit_color(view.color).astype(np.float32), _unit_color(other.color).astype(np.float32)
     start = mesh.inv_depth_planes
     fitted, offsets = start.copy(), np.zeros((len(start), own.shape[2]))
-    for sigma, n in zip((BLUR_SIGMA, 0.0), ITERATIONS):  # coarse to fine
-        a, b = (cv2.GaussianBlur(c, (0, 0), sigma) for c in (own, target)) if sigma else (own, target)
-        a_px, b_grad = _at(a.reshape(own.shape), px.u, px.v), _with_gradients(b.reshape(target.shape))
-        for _ in range(n):
-            fitted, offsets = _gauss_newton_step(fitted, offsets, px, warp, a_px, b_grad)
-    keep = _matches_better(start, fitted, offsets, px, warp, _at(own, px.u, px.v), target)
+    for sigma, steps in zip((BLUR_SIGMA, 0.0), ITERATIONS):  # coarse to fine
+        own_s, target_s = ((cv2.GaussianBlur(c, (0, 0), sigma).reshape(c.shape) for c in (own, target)) if sigma
+                           else (own, target))
+        own_px, target_grad = _at(own_s, px.u, px.v), _with_gradients(target_s)
+        for _ in range(steps):
+            fitted, offsets = _gauss_newton_step(fitted, offsets, px, warp, own_px, target_grad)
+    keep = _matches_better(start, fitted, px, warp, _at(own, px.u, px.v), target)
     keep &= _explains_codes(fitted, px, view, quant)
     planes = np.where(keep[:, None], fitted, start)
     info = {**mesh.info, "refined_quads": int(keep.sum())}
@@ -130,9 +136,9 @@ def _check_inputs(mesh, view, other) -> None:
         if not isinstance(v, View):
             raise TypeError(f"{name}: expected an ibr View, got {type(v).__name__}")
         v.require_depth("refine_planes")
-    if mesh.shape != view.shape:
-        raise ValueError(f"mesh: its shape {mesh.shape} differs from view's {view.shape}; "
-                         "pass the view the mesh was built from")
+    if mesh.shape != view.shape or not mesh.camera.allclose(view.camera):
+        raise ValueError(f"mesh: built for another camera than view's ({mesh.camera!r} against "
+                         f"{view.camera!r}); pass the view the mesh was built from")
     if _channels(view) != _channels(other):
         raise ValueError(f"other: {_channels(other)} colour channels, view has {_channels(view)}; "
                          "the planes are fitted by comparing their colours")
@@ -150,17 +156,22 @@ class _Pixels:
         self.u, self.v, self.qi, self.n_quads = u, v, qi, n_quads
         self.x = np.stack([u, v, np.ones_like(u)], 1)
 
+    def plane_values(self, planes) -> np.ndarray:
+        """(N,) inverse depth ``p . x`` of each pixel's quad plane (``planes`` (Q, 3))."""
+        return np.einsum("ij,ij->i", planes[self.qi], self.x)
+
     def per_quad(self, values) -> np.ndarray:
         """Sum of per-pixel ``values`` over each quad, (Q,)."""
         return np.bincount(self.qi, values, minlength=self.n_quads)
 
 
-def _ambiguous_quads(mesh: QuadMesh, depth, quant: DepthQuantization) -> np.ndarray:
+def _quads_to_fit(mesh: QuadMesh, depth, quant: DepthQuantization) -> np.ndarray:
     """(Q + 1,) bool (the last entry, for pixels without a quad, False): quads of :data:`MIN_AREA`
-    pixels or more whose stored codes span at most :data:`SPAN_CODES` codes. A plane across
-    more codes is pinned by where they change (a tilted plane's least-squares fit on 12 codes is
-    within 0.01 code); on the real motorcycle pair (its disparity rounded to integers) fitting those
-    to the colour moved them off the ground truth (0.065 -> 0.32 px rms)."""
+    pixels or more whose stored codes lie within :data:`SPAN_CODES` codes. A plane across more
+    codes is pinned by where they change (a tilted plane's least-squares fit on 12 codes is within
+    0.01 code); on the real motorcycle pair (its disparity rounded to integers) fitting the quads
+    spanning five codes or more to the colour moved them off the ground truth (0.065 -> 0.32 px
+    rms)."""
     r, qop = mesh.rects, mesh.quad_of_pixel
     with np.errstate(divide="ignore", invalid="ignore"):
         q = 1.0 / np.asarray(depth, np.float64)
@@ -174,7 +185,7 @@ def _ambiguous_quads(mesh: QuadMesh, depth, quant: DepthQuantization) -> np.ndar
 
 
 def _interior_pixels(mesh: QuadMesh, quads) -> _Pixels:
-    """Pixels of the ``quads`` ((Q + 1,) bool, see :func:`_ambiguous_quads`) whose 3 x 3
+    """Pixels of the ``quads`` ((Q + 1,) bool, see :func:`_quads_to_fit`) whose 3 x 3
     neighbourhood lies in their own quad (the quad's border pixels may mix in the neighbouring
     surface's colour)."""
     r = mesh.rects
@@ -199,9 +210,9 @@ class _PlaneWarp:
     """
 
     def __init__(self, source, other, other_depth, quant):
-        rel = other.cam_from_world @ source.world_from_cam
-        self.A = other.K @ rel[:3, :3] @ np.linalg.inv(source.K)
-        self.s = other.K @ rel[:3, 3]
+        rotation, translation = src_from_tgt(other, source)  # other's camera frame from the source's
+        self.A = other.K @ rotation @ np.linalg.inv(source.K)
+        self.s = other.K @ translation
         z = np.asarray(other_depth, np.float64)
         with np.errstate(divide="ignore", invalid="ignore"):
             self.q_other = np.where(np.isfinite(z) & (z > 0), 1.0 / z, 0.0)
@@ -212,7 +223,7 @@ class _PlaneWarp:
         """(u', v') in the other camera, the homogeneous ``w`` (N, 3), and whether the other
         camera sees the point: inside its image (1 px margin for the gradient) and not behind
         its depth there by more than 2 % plus one code (its depth is quantized too)."""
-        q = np.einsum("ij,ij->i", planes[px.qi], px.x)
+        q = px.plane_values(planes)
         w = px.x @ self.A.T + self.s[None] * q[:, None]
         with np.errstate(divide="ignore", invalid="ignore"):
             uo, vo = w[:, 0] / w[:, 2], w[:, 1] / w[:, 2]
@@ -257,15 +268,15 @@ def _gauss_newton_step(planes, offsets, px: _Pixels, warp: _PlaneWarp, own_px, o
     the other view's colour. Returns the new ``(planes, offsets)``."""
     uo, vo, w, ok = warp.project(planes, px)
     samples = _at(other_grad, uo, vo)
-    c = own_px.shape[1]
-    r = samples[:, :c] - own_px - offsets[px.qi]
+    nc = own_px.shape[1]  # colour channels
+    r = samples[:, :nc] - own_px - offsets[px.qi]
     ok &= np.isfinite(r).all(1)
     du = (warp.s[0] - warp.s[2] * uo) / w[:, 2]  # d u' along s: (s0 w2 - s2 w0) / w2^2
     dv = (warp.s[1] - warp.s[2] * vo) / w[:, 2]
-    g = np.nan_to_num(samples[:, c:2 * c] * du[:, None] + samples[:, 2 * c:] * dv[:, None])
+    g = np.nan_to_num(samples[:, nc:2 * nc] * du[:, None] + samples[:, 2 * nc:] * dv[:, None])
     r = np.where(ok[:, None], r, 0.0)
     weight = np.where(np.abs(r) <= HUBER, 1.0, HUBER / np.maximum(np.abs(r), 1e-12)) * ok[:, None]
-    n = 3 + c  # unknowns per quad: the plane (a, b, c) and one offset per channel
+    n = 3 + nc  # unknowns per quad: the plane (a, b, c) and one offset per channel
     normal = np.zeros((px.n_quads, n, n))
     rhs = np.zeros((px.n_quads, n))
     gg, gr = (weight * g * g).sum(1), (weight * g * r).sum(1)
@@ -273,7 +284,7 @@ def _gauss_newton_step(planes, offsets, px: _Pixels, warp: _PlaneWarp, own_px, o
         rhs[:, i] = px.per_quad(gr * px.x[:, i])
         for j in range(i, 3):
             normal[:, i, j] = normal[:, j, i] = px.per_quad(gg * px.x[:, i] * px.x[:, j])
-    for ch in range(c):
+    for ch in range(nc):
         rhs[:, 3 + ch] = -px.per_quad(weight[:, ch] * r[:, ch])
         normal[:, 3 + ch, 3 + ch] = px.per_quad(weight[:, ch])
         for i in range(3):
@@ -293,17 +304,21 @@ def _residuals(planes, px: _Pixels, warp: _PlaneWarp, own_px, other):
     return np.where(ok[:, None], r, 0.0), ok
 
 
-def _matches_better(start, fitted, offsets, px: _Pixels, warp: _PlaneWarp, own_px, other) -> np.ndarray:
-    """(Q,) bool: quads whose fitted plane (with its offsets) has the lower Huber cost over the
-    pixels both planes let the other camera see, where those are at least half of the quad's
-    fitted pixels; the start plane's offsets are its mean residuals there."""
+def _matches_better(start, fitted, px: _Pixels, warp: _PlaneWarp, own_px, other) -> np.ndarray:
+    """(Q,) bool: quads whose fitted plane has the lower Huber cost over the pixels both planes
+    let the other camera see, where those are at least half of the quad's fitted pixels; each
+    plane's residuals less their mean there per channel (its brightness offset, the same
+    estimate for both)."""
     r0, ok0 = _residuals(start, px, warp, own_px, other)
     r1, ok1 = _residuals(fitted, px, warp, own_px, other)
     both = ok0 & ok1
     seen = px.per_quad(both)
-    mean0 = np.stack([px.per_quad(r0[:, ch] * both) for ch in range(r0.shape[1])], 1) / np.maximum(seen, 1)[:, None]
-    cost0, cost1 = (px.per_quad(_huber(r - o[px.qi]) * both) for r, o in ((r0, mean0), (r1, offsets)))
-    return (cost1 < cost0) & (seen >= 0.5 * px.per_quad(np.ones(len(px.qi))))
+
+    def cost(r):
+        offset = np.stack([px.per_quad(r[:, ch] * both) for ch in range(r.shape[1])], 1) / np.maximum(seen, 1)[:, None]
+        return px.per_quad(_huber(r - offset[px.qi]) * both)
+
+    return (cost(r1) < cost(r0)) & (seen >= 0.5 * px.per_quad(np.ones(len(px.qi))))
 
 
 def _huber(r) -> np.ndarray:
@@ -314,8 +329,8 @@ def _huber(r) -> np.ndarray:
 
 def _explains_codes(planes, px: _Pixels, view: View, quant: DepthQuantization) -> np.ndarray:
     """(Q,) bool: quads whose plane stays within half a code plus :data:`TOLERANCE_CODES` of
-    every refined pixel's stored inverse depth."""
+    the stored inverse depth of every pixel it was fitted on."""
     stored = 1.0 / np.asarray(view.depth, np.float64)[px.v.astype(np.intp), px.u.astype(np.intp)]
-    q = np.einsum("ij,ij->i", planes[px.qi], px.x)
+    q = px.plane_values(planes)
     outside = np.abs(q - stored) > quant.inv_step(stored) * (0.5 + TOLERANCE_CODES)
     return px.per_quad(outside) == 0

@@ -146,6 +146,13 @@ class _Source:
             self._lone.setflags(write=False)
         return self._lone
 
+    def drop_dead_partners(self) -> None:
+        """Forget the meshes fitted to a partner view that no longer exists, and what was derived
+        from them: their keys hold its dead weak reference, so nothing can ask for them again."""
+        for cache in (self.meshes, self._trust):
+            for key in [k for k in cache if _holds_dead_ref(k)]:
+                del cache[key]
+
     def upsampled(self, k: int) -> View:
         """The source at k x k its resolution with sub-pixel silhouettes
         (:func:`~ibr.render.upsample.upsample_view`), made once per factor; its meshes are
@@ -286,12 +293,13 @@ def source_mesh(view: View, **mesh_options):
         partner = mesh_options.get(_PARTNER)
         if partner is not None:  # the mesh without a partner, its large quads fitted to the partner's colour
             own = {k: v for k, v in mesh_options.items() if k != _PARTNER}
-            mesh = source_mesh(view, **own)
             other = partner()
-            if other is not None:
-                from .plane_refine import refine_planes
+            if other is None:  # the partner is gone: nothing to fit to (and nothing cached under its key)
+                return source_mesh(view, **own)
+            from .plane_refine import refine_planes
 
-                mesh = refine_planes(mesh, view, other)
+            src.drop_dead_partners()
+            mesh = refine_planes(source_mesh(view, **own), view, other)
         else:
             from ..mesh import build_mesh
 
@@ -300,10 +308,18 @@ def source_mesh(view: View, **mesh_options):
     return mesh
 
 
-#: The mesh option (internal: added by :func:`iter_interpolate`, never a user's) holding a weak
-#: reference to the other source of a pair: the source's depth is coarsely quantized, and its
-#: mesh's large quads are fitted to the other's colour (:mod:`ibr.render.plane_refine`).
-_PARTNER = "partner"
+#: The mesh option (internal: added by :func:`iter_interpolate` and :func:`interpolation_meshes`;
+#: not a keyword a caller would type) holding a weak reference to the other source of a pair:
+#: the source's depth is coarsely quantized, and its mesh's large quads are fitted to the other's
+#: colour (:mod:`ibr.render.plane_refine`).
+_PARTNER = "partner view (internal)"
+
+
+def _holds_dead_ref(key) -> bool:
+    """Whether a cache key (nested tuples) holds a weak reference whose view no longer exists."""
+    if isinstance(key, weakref.ReferenceType):
+        return key() is None
+    return isinstance(key, tuple) and any(_holds_dead_ref(k) for k in key)
 
 
 def _with_partners(views, opts) -> list[dict]:
