@@ -396,3 +396,23 @@ def test_a_ground_plane_whose_horizon_runs_along_a_pixel_edge_is_drawn_whole(hfo
     got = rasterize_mesh(build_mesh(view), moved)
     assert got.coverage.mean() > 0.45
     np.testing.assert_array_equal(got.coverage, ref.coverage)
+
+
+def test_sample_points_is_bilinear_at_scattered_points_in_any_channel_count():
+    """``ibr.render.points.sample_points``: pixel centres give the pixels, a midpoint their mean,
+    points outside the given value; 9 channels (remap takes 4 at a time), 2-D images, 2000
+    points (rows of 1024)."""
+    from ibr.render.points import sample_points
+
+    rng = np.random.default_rng(1)
+    img = rng.random((7, 11, 9)).astype(np.float32)
+    u = rng.integers(0, 11, 2000).astype(float)
+    v = rng.integers(0, 7, 2000).astype(float)
+    got = sample_points(img, u, v)
+    assert got.shape == (2000, 9) and np.array_equal(got, img[v.astype(int), u.astype(int)])
+    mid = sample_points(img[..., 0], [2.5], [3.0])
+    assert mid.shape == (1, 1) and mid[0, 0] == pytest.approx((img[3, 2, 0] + img[3, 3, 0]) / 2, rel=1e-5)
+    assert np.isnan(sample_points(img, [-3.0, 20.0], [1.0, 1.0], outside=np.nan)).all()
+    assert (sample_points(img, [-3.0], [1.0]) == 0).all()
+    with pytest.raises(ValueError, match="v: expected 2 values"):
+        sample_points(img, [1.0, 2.0], [1.0])

@@ -34,6 +34,7 @@ from ..base.depth import DepthQuantization, quantization_of
 from ..base.validate import check_finite_scalar, check_positive
 from ..base.view import View
 from ..mesh.quad_mesh import QuadMesh
+from .points import sample_points
 from .rasterize import src_from_tgt
 from .upsample import _unit_color
 
@@ -238,19 +239,8 @@ class _PlaneWarp:
 
 
 def _at(image, u, v) -> np.ndarray:
-    """Bilinear samples (N, C) float32 of ``image`` (H, W, C) at (u, v), NaN outside
-    (``cv2.remap`` on rows of 1024 samples: its maps must be narrower than 32767)."""
-    n, width = len(u), 1024
-    rows = max(1, -(-n // width))
-    pad = rows * width - n
-    mu = np.pad(np.asarray(u, np.float32), (0, pad)).reshape(rows, width)
-    mv = np.pad(np.asarray(v, np.float32), (0, pad)).reshape(rows, width)
-    out = []
-    for c0 in range(0, image.shape[2], 3):  # remap takes at most four channels
-        part = cv2.remap(np.ascontiguousarray(image[..., c0:c0 + 3]), mu, mv, cv2.INTER_LINEAR,
-                         borderMode=cv2.BORDER_CONSTANT, borderValue=(np.nan,) * 4)
-        out.append(part.reshape(rows * width, -1)[:n])
-    return np.concatenate(out, 1)
+    """Bilinear samples (N, C) float32 of ``image`` at (u, v), NaN outside."""
+    return sample_points(image, u, v, outside=np.nan)
 
 
 def _with_gradients(image) -> np.ndarray:

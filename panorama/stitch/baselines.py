@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import math
 
-import cv2
 import numpy as np
 
 from ibr.base.camera import Camera
 from ibr.base.ray_camera import SphericalCamera
+from ibr.render.points import sample_points
 
 from .rgbd import Stitched, check_views, stitch_rgbd
 
@@ -34,21 +34,6 @@ def _check_camera(camera):
     if not isinstance(camera, SphericalCamera):
         raise TypeError(f"camera: expected a SphericalCamera, got {type(camera).__name__}")
     return camera
-
-
-def _sample_points(img, pu, pv) -> np.ndarray:
-    """Bilinear samples (N, C) float32 of ``img`` at points (pu, pv) (centres at integers; 0 outside).
-
-    ``cv2.remap`` takes maps under 32767 columns, so the points are laid out in rows of 1024.
-    """
-    n = pu.size
-    rows = max(1, -(-n // 1024))
-    mu = np.full(rows * 1024, -1e6, np.float32)
-    mv = np.full(rows * 1024, -1e6, np.float32)
-    mu[:n], mv[:n] = pu.ravel(), pv.ravel()
-    out = cv2.remap(np.ascontiguousarray(img, np.float32), mu.reshape(rows, 1024), mv.reshape(rows, 1024),
-                    cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-    return out.reshape(rows * 1024, -1)[:n]
 
 
 def strip_stitch(views, camera: SphericalCamera) -> Stitched:
@@ -100,7 +85,7 @@ def strip_stitch(views, camera: SphericalCamera) -> Stitched:
         d_cam = (d_rig[sel] @ rig_rot.T) @ cam.world_from_cam[:3, :3]
         pu = cam.fx * d_cam[:, 0] / d_cam[:, 2] + cam.cx
         pv = cam.fy * d_cam[:, 1] / d_cam[:, 2] + cam.cy
-        color[sel] = _sample_points(view.color, pu, pv)
+        color[sel] = sample_points(view.color, pu, pv)
     holes = choice < 0
     out = _to_dtype(color, views[0].color)
     return Stitched(out, np.full((h, w), np.nan, np.float32), holes, choice.astype(np.int16), camera)
@@ -171,9 +156,9 @@ def slit_stitch(views, camera: SphericalCamera, n: int, *, lat_max_deg: float | 
         pu = f * d[:, 0] / d[:, 2] + slit.cx
         pv = f * d[:, 1] / d[:, 2] + slit.cy
         col = res.color.astype(np.float32)
-        color[sel] = _sample_points(col, pu, pv)
-        cov = _sample_points((~res.holes).astype(np.float32), pu, pv)[:, 0]
-        z = _sample_points(np.nan_to_num(res.depth, nan=0.0), pu, pv)[:, 0]
+        color[sel] = sample_points(col, pu, pv)
+        cov = sample_points((~res.holes).astype(np.float32), pu, pv)[:, 0]
+        z = sample_points(np.nan_to_num(res.depth, nan=0.0), pu, pv)[:, 0]
         depth[sel] = np.where(cov > 0.999, z * np.linalg.norm(d / d[:, 2:3], axis=1), np.nan)
         holes[sel] = cov <= 0.999
     return Stitched(_to_dtype(color, views[0].color), depth, holes, np.where(holes, -1, k_of).astype(np.int16),
