@@ -79,3 +79,12 @@ def test_review_findings_numbers_poses_look_at_and_float32_depth():
         cam.with_pose(pose)
     with pytest.raises(TypeError, match="depth: expected a float or integer depth map"):
         View(np.zeros((4, 4, 3), np.uint8), np.ones((4, 4), bool), cam)
+
+
+def test_check_flag_takes_bools_only():
+    from ibr.base.validate import check_flag
+
+    assert check_flag("x", True) is True and check_flag("x", np.bool_(False)) is False
+    for bad in ("no", 0, 1.0, None):
+        with pytest.raises(TypeError, match="x: expected True or False"):
+            check_flag("x", bad)

@@ -24,6 +24,7 @@ __all__ = [
     "check_choice",
     "check_color",
     "check_finite_scalar",
+    "check_flag",
     "check_image",
     "check_image_size",
     "check_keys",
@@ -124,6 +125,14 @@ def check_finite_scalar(name: str, value) -> float:
     if not np.isfinite(out):
         raise ValueError(f"{name}: expected a finite number, got {value!r}")
     return out
+
+
+def check_flag(name: str, value) -> bool:
+    """Return ``value`` as a bool if it is one (Python or numpy), or raise a TypeError naming ``name``
+    (a string or a number is no flag: ``"no"`` would be true)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name}: expected True or False, got {value!r}")
+    return bool(value)
 
 
 def check_positive(name: str, value, *, allow_inf: bool = False) -> float:

@@ -22,7 +22,7 @@ from typing import Iterator, Sequence
 
 import numpy as np
 
-from ..base.validate import check_choice, check_finite_scalar, check_mesh_options, check_positive
+from ..base.validate import check_choice, check_finite_scalar, check_flag, check_mesh_options, check_positive
 from ..base.camera import Camera, interpolate_cameras
 from ..base.depth import depth_steps, quantization_of, set_quantization
 from .composite import (COMPOSITE_MODES, Composite, _pixels_of, composite, mixed_pixels, pack_trust, remap_composite,
@@ -620,18 +620,13 @@ def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
     return Rendering(color, depth, holes, filled, camera, t)
 
 
-def _check_flag(name: str, value) -> None:
-    if not isinstance(value, (bool, np.bool_)):
-        raise TypeError(f"{name}: expected True or False, got {value!r}")
-
-
 def check_antialias(antialias, method: str) -> bool:
     """``antialias`` as a bool; True only with the mesh method (the subsamples trace its quads)."""
-    _check_flag("antialias", antialias)
+    antialias = check_flag("antialias", antialias)
     if antialias and method != "mesh":
         raise ValueError(f"antialias: the edge subsamples trace the quad mesh, so it needs method='mesh' (--method "
                          f"mesh on the command line), got method={method!r}")
-    return bool(antialias)
+    return antialias
 
 
 def _check_target(camera, name="camera") -> Camera:
@@ -813,7 +808,7 @@ def iter_interpolate(
     from .forward import SPLATS
 
     check_choice("splat", splat, SPLATS)
-    _check_flag("silhouettes", silhouettes)
+    check_flag("silhouettes", silhouettes)
     antialias = check_antialias(antialias, method)
     depth_tol = check_positive("depth_tol", depth_tol)
     k = check_supersample(supersample)

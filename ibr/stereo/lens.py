@@ -39,8 +39,8 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from ..base.validate import (check_array, check_choice, check_color, check_finite_scalar, check_image, check_number,
-                             check_positive)
+from ..base.validate import (check_array, check_choice, check_color, check_finite_scalar, check_flag, check_image,
+                             check_number, check_positive)
 
 __all__ = [
     "RadialDistortion",
@@ -228,8 +228,7 @@ def distortion_maps(width: int, height: int, lens: RadialDistortion, *, center_p
         raise TypeError(f"lens: expected a RadialDistortion, got {type(lens).__name__}")
     width = check_number("width", width, integer=True, minimum=1)
     height = check_number("height", height, integer=True, minimum=1)
-    if not isinstance(inverse, (bool, np.bool_)):  # checked always, not only where it is used
-        raise TypeError(f"inverse: expected True or False, got {inverse!r}")
+    check_flag("inverse", inverse)  # checked always, not only where it is used
     check_choice("method", method, INVERSE_METHODS)
     center = None if center_px is None else _check_center(center_px, int(width), int(height))
     scale = None if scale_px is None else check_positive("scale_px", scale_px)
