@@ -277,9 +277,22 @@ def code_planes():
         plane_refine.COARSE_PX = saved
 
 
+@contextlib.contextmanager
+def colour_planes_only():
+    """Quads of quantized depth fitted to the other view's colour only, the others kept on their
+    codes (before :mod:`ibr.mesh.code_bins`, sixteenth session)."""
+    saved = plane_refine.fit_planes_in_code_bins
+    plane_refine.fit_planes_in_code_bins = lambda mesh, depth, quads: (mesh.inv_depth_planes,
+                                                                      np.zeros(len(mesh.rects), bool))
+    try:
+        yield
+    finally:
+        plane_refine.fit_planes_in_code_bins = saved
+
+
 def section_quantized():
     print("\n3. quantized re-encodings: quads of source a and PSNR over covered pixels (t = 0.25/0.5/0.75)")
-    print(f"{'scene':<8} {'encoding':<44} {'quads':>6} {'x exact':>8} {'PSNR dB':>8} {'vs exact':>9}")
+    print(f"{'scene':<8} {'encoding':<48} {'quads':>6} {'x exact':>8} {'PSNR dB':>8} {'vs exact':>9}")
     for name in ("room", "clutter"):
         a, b, truths = load_pair(name)
         cams = [g.camera for g in truths]
@@ -296,7 +309,7 @@ def section_quantized():
             return n, got
 
         n0, (p0, l0) = scores(a, b, None)
-        print(f"{name:<8} {'exact float depth':<44} {n0:6d} {1.0:8.2f} {p0:8.2f} {0.0:9.2f}   bilinear {l0:.2f}")
+        print(f"{name:<8} {'exact float depth':<48} {n0:6d} {1.0:8.2f} {p0:8.2f} {0.0:9.2f}   bilinear {l0:.2f}")
 
         def disparity_views():
             return in_disparity_codes((a, b), base * f)
@@ -304,15 +317,16 @@ def section_quantized():
         assert all(np.nanmax(base * f / v.depth) <= 255 for v in (a, b))
         mm = [View(v.color, (np.rint(v.depth * 1000) / 1000).astype(np.float32), v.camera, v.name) for v in (a, b)]
         disparity = DepthQuantization.disparity(baseline=base, focal_px=f)
-        rows = (("8-bit disparity, no quantization", disparity_views(), None, False),
-                ("8-bit disparity, quantization, code planes", disparity_views(), disparity, True),
-                ("8-bit disparity, quantization", disparity_views(), disparity, False),
-                ("16-bit mm, no quantization", mm, None, False),
-                ("16-bit mm, quantization", mm, DepthQuantization.codes(0.001), False))
+        rows = (("8-bit disparity, no quantization", disparity_views(), None, None),
+                ("8-bit disparity, quantization, code planes", disparity_views(), disparity, code_planes),
+                ("8-bit disparity, quantization, colour fit only", disparity_views(), disparity, colour_planes_only),
+                ("8-bit disparity, quantization", disparity_views(), disparity, None),
+                ("16-bit mm, no quantization", mm, None, None),
+                ("16-bit mm, quantization", mm, DepthQuantization.codes(0.001), None))
         for label, views, q, before in rows:
-            with code_planes() if before else contextlib.nullcontext():
+            with before() if before else contextlib.nullcontext():
                 n, (p, lp) = scores(*views, q)
-            print(f"{name:<8} {label:<44} {n:6d} {n / n0:8.2f} {p:8.2f} {p - p0:+9.2f}   "
+            print(f"{name:<8} {label:<48} {n:6d} {n / n0:8.2f} {p:8.2f} {p - p0:+9.2f}   "
                   f"bilinear {lp:.2f} {lp - l0:+.2f}")
     motorcycle_rounded_disparity()
 
@@ -334,9 +348,12 @@ def motorcycle_rounded_disparity():
     other = View(right.color, np.full(disparity.shape, np.nan, np.float32), right.camera, "right")
     mesh = build_mesh(codes, quantization=DepthQuantization.disparity(baseline=bf / left.camera.fx,
                                                                       focal_px=left.camera.fx))
-    for label, m in (("planes on the codes", mesh), ("fitted to the right view", refine_planes(mesh, codes, other))):
+    with colour_planes_only():
+        colour_only = refine_planes(mesh, codes, other)
+    for label, m in (("planes on the codes", mesh), ("fitted to the right view's colour", colour_only),
+                     ("the same, the others in the codes' bins", refine_planes(mesh, codes, other))):
         err = bf / mesh_depth(m) - doffs - disparity
-        print(f"{'motorcycle':<10} {'integer disparity, ' + label:<44} rms disparity error vs the float ground truth "
+        print(f"{'motorcycle':<10} {'integer disparity, ' + label:<60} rms disparity error vs the float ground truth "
               f"{np.sqrt(np.nanmean(err**2)):.3f} px")
 
 

@@ -402,8 +402,10 @@ def run(args) -> int:
             t0 = time.perf_counter()                           # sources, built with the first frame
             mesh_a, mesh_b = interpolation_meshes(view_a, view_b, ts)
             n_fitted = [m.info.get("refined_quads", 0) for m in (mesh_a, mesh_b)]
+            n_binned = [m.info.get("bin_fitted_quads", 0) for m in (mesh_a, mesh_b)]
             fitted = (f" (coarse depth codes: planes of {n_fitted[0]} + {n_fitted[1]} large quads fitted to the "
-                      "other view's colour)") if any(n_fitted) else ""
+                      f"other view's colour, of {n_binned[0]} + {n_binned[1]} more placed inside the codes' bins "
+                      "around them)") if any(n_fitted + n_binned) else ""
             info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads{fitted}, built in "
                  f"{(time.perf_counter() - t0) * 1e3:.1f} ms (once, {'compiling' if compiling else 'loading'} the "
                  "segmentation kernels included; reused for every frame)")

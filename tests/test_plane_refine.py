@@ -123,6 +123,7 @@ def test_exact_depth_is_left_as_it_is(plane_pair):
     mesh = build_mesh(a)
     refined = refine_planes(mesh, a, b)
     assert refined.info["refined_quads"] == 0 and np.array_equal(refined.inv_depth_planes, mesh.inv_depth_planes)
+    assert refined.info["bin_fitted_quads"] == 0
 
 
 def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
@@ -142,12 +143,14 @@ def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
         is_coarse(0.5, 3.0, base, f)
 
 
-def test_room_in_8bit_disparity_renders_within_0_3_db_of_its_exact_depth():
-    """Issue 11's target on the bundled room pair re-encoded as 8-bit integer disparity (its own
-    baseline), t = .25/.5/.75, covered pixels: measured -0.25 dB (-0.40 with the code planes).
-    At a source's own pose the source comes back exactly."""
-    a, b = load_view(DATA_DIR / "room_a.json"), load_view(DATA_DIR / "room_b.json")
-    truths = [load_view(DATA_DIR / f"room_t{p:03d}.json") for p in (25, 50, 75)]
+@pytest.mark.parametrize("scene, within", [("room", 0.3), ("clutter", 0.4)])
+def test_8bit_disparity_renders_close_to_its_exact_depth(scene, within):
+    """Issue 11's target (0.3 dB) on the bundled pairs re-encoded as 8-bit integer disparity
+    (their own baseline), t = .25/.5/.75, covered pixels: measured room -0.23 dB (-0.40 with the
+    code planes, -0.25 with only the colour fit), clutter -0.33 (-0.71, -0.56: the target not
+    met). At a source's own pose the source comes back exactly."""
+    a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
+    truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
     bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx
     codes = _in_disparity_codes((a, b), bf)
     q = DepthQuantization.disparity(baseline=bf / a.camera.fx, focal_px=a.camera.fx)
@@ -159,7 +162,7 @@ def test_room_in_8bit_disparity_renders_within_0_3_db_of_its_exact_depth():
 
     exact = psnr(interpolate(a, b, cams, fill="none"))
     quantized = psnr(interpolate(*codes, cams, fill="none", mesh_options={"quantization": q}))
-    assert quantized > exact - 0.3
+    assert quantized > exact - within
     own = interpolate(*codes, [0.0, 1.0], fill="none", mesh_options={"quantization": q})
     for r, v in zip(own, codes):
         assert np.array_equal(r.color[~r.holes], v.color[~r.holes])
@@ -214,7 +217,8 @@ def test_the_meshes_interpolate_uses_are_built_up_front_and_say_what_was_fitted(
     assert [len(_source(v).meshes) for v in (va, vb)] == cached
     assert all("refined_quads" not in m.info for m in interpolation_meshes(a, b, 0.5))
     assert cli.main(["interpolate", str(pa), str(pb), "--t", "0.5", "--out", str(tmp_path / "out")]) == 0
-    assert "planes of 1 + 1 large quads fitted to the other view's colour" in capsys.readouterr().err
+    assert ("planes of 1 + 1 large quads fitted to the other view's colour, of 0 + 0 more placed inside the "
+            "codes' bins" in capsys.readouterr().err)
 
 
 def test_interpolation_meshes_refuses_what_interpolate_refuses(plane_pair):

@@ -15,11 +15,14 @@ colour, then on the colour itself, pixels that the other source sees occluded le
 code plane only where it matches the other source better (robust cost over the pixels both
 planes see) and explains the code of every pixel it was fitted on within :data:`TOLERANCE_CODES`;
 otherwise the quad keeps its plane (weak texture along the epipolar lines, occlusions, small
-quads). ``interpolate`` fits its two sources to each other unless it supersamples.
+quads), and it and every quad not fitted to the colour get the plane the bins of the codes
+around them allow (:mod:`ibr.mesh.code_bins`). ``interpolate`` fits its two sources to each
+other unless it supersamples.
 
 Measured (``python benchmarks/bench_edges.py --quick``, section 3: 8-bit disparity against the
 exact depth, covered pixels, t = .25/.5/.75): room -0.40 -> -0.25 dB, clutter -0.71 -> -0.56;
-docs/edges.md section 3 has the other scenes and what was tried.
+with the bins for the other quads (sixteenth session) room -0.23, clutter -0.33; docs/edges.md
+section 3 has the other scenes and what was tried.
 
 Conventions: pixel centres at integer (u, v); planes in inverse planar depth per source pixel;
 colours compared in units of their dtype's full scale.
@@ -33,6 +36,7 @@ import numpy as np
 from ..base.depth import DepthQuantization, quantization_of
 from ..base.validate import check_finite_scalar, check_positive
 from ..base.view import View
+from ..mesh.code_bins import fit_planes_in_code_bins
 from ..mesh.quad_mesh import QuadMesh
 from .points import sample_points
 from .rasterize import src_from_tgt
@@ -103,19 +107,34 @@ def refine_planes(mesh: QuadMesh, view: View, other: View) -> QuadMesh:
     QuadMesh
         Same rects and pixel map; planes of quads of :data:`MIN_AREA` pixels or more within
         :data:`SPAN_CODES` codes replaced where the fit matched ``other`` better and explains the
-        codes (module docstring); ``info["refined_quads"]`` counts them (0 without a
-        quantization).
+        codes (module docstring), ``info["refined_quads"]`` of them; every other quad's plane
+        placed inside the bins of the codes around it where that works
+        (:func:`ibr.mesh.code_bins.fit_planes_in_code_bins`), ``info["bin_fitted_quads"]`` of
+        them (both 0 without a quantization).
     """
     _check_inputs(mesh, view, other)
     quant = mesh.info.get("quantization")
-    px = _interior_pixels(mesh, _quads_to_fit(mesh, view.depth, quant)) if quant is not None else None
-    if px is None or len(px.qi) == 0:
+    if quant is None:
         return QuadMesh(mesh.camera, mesh.rects, mesh.inv_depth_planes, mesh.quad_of_pixel,
-                        {**mesh.info, "refined_quads": 0})
+                        {**mesh.info, "refined_quads": 0, "bin_fitted_quads": 0})
+    px = _interior_pixels(mesh, _quads_to_fit(mesh, view.depth, quant))
+    planes, keep = _fit_to_colour(mesh, view, other, px)
+    coloured = QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel, mesh.info)
+    planes, in_bins = fit_planes_in_code_bins(coloured, view.depth, ~keep)
+    info = {**mesh.info, "refined_quads": int(keep.sum()), "bin_fitted_quads": int(in_bins.sum())}
+    return QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel, info)
+
+
+def _fit_to_colour(mesh: QuadMesh, view: View, other: View, px: "_Pixels") -> tuple[np.ndarray, np.ndarray]:
+    """The mesh's planes with those of ``px``'s quads fitted to ``other``'s colour where kept
+    (module docstring), (Q, 3), and which were kept, (Q,) bool."""
+    start = mesh.inv_depth_planes
+    if len(px.qi) == 0:
+        return start, np.zeros(len(start), bool)
+    quant = mesh.info["quantization"]
     other_quant = quantization_of(other)
     warp = _PlaneWarp(view.camera, other.camera, other.depth, quant if other_quant is None else other_quant)
     own, target = _unit_color(view.color).astype(np.float32), _unit_color(other.color).astype(np.float32)
-    start = mesh.inv_depth_planes
     fitted, offsets = start.copy(), np.zeros((len(start), own.shape[2]))
     for sigma, steps in zip((BLUR_SIGMA, 0.0), ITERATIONS):  # coarse to fine
         own_s, target_s = ((cv2.GaussianBlur(c, (0, 0), sigma).reshape(c.shape) for c in (own, target)) if sigma
@@ -125,9 +144,7 @@ def refine_planes(mesh: QuadMesh, view: View, other: View) -> QuadMesh:
             fitted, offsets = _gauss_newton_step(fitted, offsets, px, warp, own_px, target_grad)
     keep = _matches_better(start, fitted, px, warp, _at(own, px.u, px.v), target)
     keep &= _explains_codes(fitted, px, view, quant)
-    planes = np.where(keep[:, None], fitted, start)
-    info = {**mesh.info, "refined_quads": int(keep.sum())}
-    return QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel, info)
+    return np.where(keep[:, None], fitted, start), keep
 
 
 def _check_inputs(mesh, view, other) -> None:

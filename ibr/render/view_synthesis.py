@@ -863,8 +863,9 @@ def interpolation_meshes(view_a: View, view_b: View, t, *, mesh_options: dict | 
     -------
     (QuadMesh, QuadMesh)
         Where a source's depth is coarsely quantized (:mod:`ibr.render.plane_refine`), its mesh
-        has its large quads fitted to the other source's colour; ``mesh.info["refined_quads"]``
-        counts the planes that changed.
+        has its large quads fitted to the other source's colour and the others placed inside the
+        bins of their codes (:mod:`ibr.mesh.code_bins`); ``mesh.info["refined_quads"]`` and
+        ``mesh.info["bin_fitted_quads"]`` count the planes that changed.
     """
     check_choice("lod", lod, LODS)
     _check_pair(view_a, view_b)

@@ -1,0 +1,186 @@
+"""numba kernel for :mod:`ibr.mesh.code_bins` (private; the wrapper validates inputs).
+
+Pixel (u, v) = (column, row) is element ``[v, u]``; rects are ``(x0, y0, x1, y1)``, ends
+exclusive. Inverse depth ``q`` is NaN where a pixel has no depth; ``step`` is the encoding's
+code size in inverse depth at each pixel's stored value.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..base.jit import njit
+
+_N = 6  # quadratic surface q = a u + b v + c + d u^2 + e u v + f v^2 (centred u, v)
+
+
+@njit(cache=True)
+def _terms(du, dv, out):
+    out[0] = du
+    out[1] = dv
+    out[2] = 1.0
+    out[3] = du * du
+    out[4] = du * dv
+    out[5] = dv * dv
+
+
+@njit(cache=True)
+def _solve_ridge(a, b, n, ridge):
+    """Solve (a + ridge (diag(a) + max(diag) I)) x = b for the symmetric positive semi-definite
+    n x n ``a`` by Cholesky (the tiny ridge keeps degenerate directions, e.g. curvature across a
+    one-pixel line, at zero). Returns x, or NaNs if the system is empty."""
+    m = np.zeros((n, n))
+    big = 0.0
+    for i in range(n):
+        big = max(big, a[i, i])
+    x = np.full(n, np.nan)
+    if big <= 0.0:
+        return x
+    for i in range(n):
+        for j in range(n):
+            m[i, j] = a[i, j]
+        m[i, i] += ridge * (a[i, i] + big) + 1e-300
+    ll = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            s = m[i, j]
+            for k in range(j):
+                s -= ll[i, k] * ll[j, k]
+            if i == j:
+                if s <= 0.0:
+                    return x
+                ll[i, i] = np.sqrt(s)
+            else:
+                ll[i, j] = s / ll[j, j]
+    y = np.zeros(n)
+    for i in range(n):
+        s = b[i]
+        for k in range(i):
+            s -= ll[i, k] * y[k]
+        y[i] = s / ll[i, i]
+    for i in range(n - 1, -1, -1):
+        s = y[i]
+        for k in range(i + 1, n):
+            s -= ll[k, i] * x[k]
+        x[i] = s / ll[i, i]
+    return x
+
+
+@njit(cache=True)
+def _region(q, step, x0, y0, x1, y1, grow, span):
+    """The window of the rect grown by ``grow`` px (clipped to the image) and a mask of its
+    pixels reached from the rect in at most ``grow`` 4-connected steps, each between valid
+    neighbours at most ``span`` codes apart (the same surface)."""
+    h, w = q.shape
+    wx0, wy0, wx1, wy1 = max(x0 - grow, 0), max(y0 - grow, 0), min(x1 + grow, w), min(y1 + grow, h)
+    ww, wh = wx1 - wx0, wy1 - wy0
+    dist = np.full((wh, ww), -1, np.int64)
+    queue = np.empty((wh * ww, 2), np.int64)
+    head, tail = 0, 0
+    for v in range(y0, y1):
+        for u in range(x0, x1):
+            if np.isfinite(q[v, u]):
+                dist[v - wy0, u - wx0] = 0
+                queue[tail, 0], queue[tail, 1] = v, u
+                tail += 1
+    while head < tail:
+        v, u = queue[head, 0], queue[head, 1]
+        head += 1
+        d = dist[v - wy0, u - wx0]
+        if d >= grow:
+            continue
+        for k in range(4):
+            nv = v + (1 if k == 0 else -1 if k == 1 else 0)
+            nu = u + (1 if k == 2 else -1 if k == 3 else 0)
+            if nv < wy0 or nv >= wy1 or nu < wx0 or nu >= wx1 or dist[nv - wy0, nu - wx0] >= 0:
+                continue
+            if not np.isfinite(q[nv, nu]) or abs(q[nv, nu] - q[v, u]) > span * step[v, u]:
+                continue
+            dist[nv - wy0, nu - wx0] = d + 1
+            queue[tail, 0], queue[tail, 1] = nv, nu
+            tail += 1
+    return wx0, wy0, dist >= 0
+
+
+@njit(cache=True)
+def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after, reject_codes,
+                     accept_codes, ridge):
+    """Planes ``q = a u + b v + c`` (uncentred pixel coordinates) for the ``quads`` (indices into
+    ``rects``), NaN rows where no plane was accepted. See :func:`ibr.mesh.code_bins.fit_planes_in_code_bins`."""
+    out = np.full((len(quads), 3), np.nan)
+    t = np.zeros(_N)
+    for n in range(len(quads)):
+        x0, y0, x1, y1 = rects[quads[n], 0], rects[quads[n], 1], rects[quads[n], 2], rects[quads[n], 3]
+        wx0, wy0, reach = _region(q, step, x0, y0, x1, y1, grow, span)
+        uc, vc = 0.5 * (x0 + x1 - 1), 0.5 * (y0 + y1 - 1)
+        wh, ww = reach.shape
+        scale = 0.5 * max(wh, ww)  # coordinates of order one: a well-conditioned normal matrix
+        weight = np.zeros((wh, ww))
+        target = np.zeros((wh, ww))
+        for j in range(wh):
+            for i in range(ww):
+                if reach[j, i]:
+                    weight[j, i] = 1.0 / step[wy0 + j, wx0 + i] ** 2  # least squares in codes
+                    target[j, i] = q[wy0 + j, wx0 + i]
+        coef = np.full(_N, np.nan)
+        for it in range(iterations):
+            a = np.zeros((_N, _N))
+            b = np.zeros(_N)
+            for j in range(wh):
+                for i in range(ww):
+                    wt = weight[j, i]
+                    if wt == 0.0:
+                        continue
+                    _terms((wx0 + i - uc) / scale, (wy0 + j - vc) / scale, t)
+                    for r in range(_N):
+                        b[r] += wt * t[r] * target[j, i]
+                        for c in range(_N):
+                            a[r, c] += wt * t[r] * t[c]
+            coef = _solve_ridge(a, b, _N, ridge)
+            if not np.isfinite(coef[0]):
+                break
+            # the surface projected into each pixel's bin (half a code either side of its code)
+            for j in range(wh):
+                for i in range(ww):
+                    if weight[j, i] == 0.0:
+                        continue
+                    v, u = wy0 + j, wx0 + i
+                    _terms((u - uc) / scale, (v - vc) / scale, t)
+                    model = 0.0
+                    for r in range(_N):
+                        model += coef[r] * t[r]
+                    r_codes = (model - q[v, u]) / step[v, u]
+                    inside = x0 <= u < x1 and y0 <= v < y1
+                    if it >= reject_after and not inside and abs(r_codes) > 0.5 + reject_codes:
+                        weight[j, i] = 0.0  # another surface (a crease, a neighbour at the same depth)
+                        continue
+                    target[j, i] = q[v, u] + min(max(r_codes, -0.5), 0.5) * step[v, u]
+        if not np.isfinite(coef[0]):
+            continue
+        # the plane of least squares of that surface over the quad's own pixels
+        a3 = np.zeros((3, 3))
+        b3 = np.zeros(3)
+        for v in range(y0, y1):
+            for u in range(x0, x1):
+                _terms((u - uc) / scale, (v - vc) / scale, t)
+                model = 0.0
+                for r in range(_N):
+                    model += coef[r] * t[r]
+                for r in range(3):
+                    b3[r] += t[r] * model
+                    for c in range(3):
+                        a3[r, c] += t[r] * t[c]
+        p = _solve_ridge(a3, b3, 3, ridge)
+        if not np.isfinite(p[0]):
+            continue
+        a_u, a_v = p[0] / scale, p[1] / scale
+        plane = np.array([a_u, a_v, p[2] - a_u * uc - a_v * vc])
+        ok = True
+        for v in range(y0, y1):
+            for u in range(x0, x1):
+                if np.isfinite(q[v, u]) and abs(plane[0] * u + plane[1] * v + plane[2] - q[v, u]) > (
+                        0.5 + accept_codes) * step[v, u]:
+                    ok = False
+        if ok:
+            out[n] = plane
+    return out

@@ -1,0 +1,159 @@
+"""Issue 11, part 3: planes of quantized depth placed inside the bins of the codes around each
+quad (:mod:`ibr.mesh.code_bins`), against analytic surfaces in integer disparity codes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ibr.base.camera import Camera
+from ibr.base.depth import DepthQuantization
+from ibr.base.view import View
+from ibr.mesh import build_mesh
+from ibr.mesh.code_bins import ACCEPT_CODES, fit_planes_in_code_bins
+from ibr.mesh.quad_mesh import QuadMesh, fit_inv_depth_planes
+
+BF = 100.0  # baseline x focal length (px x scene units): disparity d = BF / z, one code = 1 px
+H, W = 64, 80
+QUANT = DepthQuantization.disparity(baseline=1.0, focal_px=BF)
+
+
+def _grid_mesh(depth, size=8) -> QuadMesh:
+    """A mesh of size x size quads tiling the valid pixels, planes on the stored depth."""
+    rects = np.array([(x, y, min(x + size, W), min(y + size, H)) for y in range(0, H, size)
+                      for x in range(0, W, size)], np.int32)
+    rects = np.array([r for r in rects if np.isfinite(depth[r[1]:r[3], r[0]:r[2]]).all()], np.int32)
+    qop = np.full((H, W), -1, np.int32)
+    for i, (x0, y0, x1, y1) in enumerate(rects):
+        qop[y0:y1, x0:x1] = i
+    camera = Camera(fx=BF, fy=BF, cx=W / 2, cy=H / 2, width=W, height=H)
+    return QuadMesh(camera, rects, fit_inv_depth_planes(depth, rects), qop, {"quantization": QUANT})
+
+
+def _codes(disparity) -> np.ndarray:
+    return (BF / np.rint(disparity)).astype(np.float32)
+
+
+def _plane_error(planes, rects, disparity) -> np.ndarray:
+    """rms disparity error (codes) of each quad's plane against the true disparity."""
+    out = []
+    for (x0, y0, x1, y1), p in zip(rects, planes):
+        v, u = np.mgrid[y0:y1, x0:x1]
+        out.append(np.sqrt(np.mean((BF * (p[0] * u + p[1] * v + p[2]) - disparity[y0:y1, x0:x1]) ** 2)))
+    return np.array(out)
+
+
+def _uv():
+    return np.mgrid[0:H, 0:W].astype(np.float64)[::-1]
+
+
+def test_a_gentle_slope_inside_flat_codes_is_found_from_the_codes_around():
+    """A plane rising 0.06 code per pixel: an 8 x 8 quad holds one or two codes, so its
+    least-squares plane on them is up to half a code off; the bins around it pin the slope."""
+    u, v = _uv()
+    disparity = 20.3 + 0.06 * u + 0.02 * v
+    mesh = _grid_mesh(_codes(disparity))
+    planes, fitted = fit_planes_in_code_bins(mesh, _codes(disparity))
+    before = _plane_error(mesh.inv_depth_planes, mesh.rects, disparity)
+    after = _plane_error(planes, mesh.rects, disparity)
+    assert fitted.mean() > 0.9
+    assert np.mean(before) > 0.15
+    assert np.mean(after) < 0.25 * np.mean(before) and np.max(after) < np.max(before)
+
+
+def test_a_curved_surface_is_placed_better_than_the_codes_place_it():
+    """A paraboloid (a sphere's cap, disparity 14-26 codes): every quad's plane closer to the
+    truth on average, none worse than half a code."""
+    u, v = _uv()
+    disparity = 26.0 - 0.004 * ((u - 40) ** 2 + (v - 32) ** 2)
+    mesh = _grid_mesh(_codes(disparity))
+    planes, fitted = fit_planes_in_code_bins(mesh, _codes(disparity))
+    before = _plane_error(mesh.inv_depth_planes, mesh.rects, disparity)
+    after = _plane_error(planes, mesh.rects, disparity)
+    assert np.mean(after) < 0.6 * np.mean(before)
+    assert np.max(after) < 0.5
+
+
+def test_a_crease_and_a_depth_edge_do_not_bend_the_plane_beside_them():
+    """A roof (two planes meeting at x = 40, slopes +-0.07 code/px) in front of a far wall
+    (disparity 5) from y = 48 down: the quads touching the crease or the wall are placed better
+    than their codes place them (the other face's pixels far from its plane are left out, the wall
+    is another surface), though the near side of the crease bends them a little."""
+    u, v = _uv()
+    disparity = np.where(u < 40, 20.2 + 0.07 * (u - 40), 20.2 - 0.07 * (u - 40)) + 0.01 * v
+    disparity = np.where(v >= 48, 5.0, disparity)
+    mesh = _grid_mesh(_codes(disparity))
+    planes, fitted = fit_planes_in_code_bins(mesh, _codes(disparity))
+    before = _plane_error(mesh.inv_depth_planes, mesh.rects, disparity)
+    after = _plane_error(planes, mesh.rects, disparity)
+    x0, y0 = mesh.rects[:, 0], mesh.rects[:, 1]
+    beside = ((x0 == 32) | (x0 == 40) | (y0 == 40)) & (y0 < 48)
+    assert fitted[beside].all()
+    assert np.mean(after[beside]) < 0.5 * np.mean(before[beside])
+    assert np.max(after[beside]) < np.max(before[beside])
+    assert np.array_equal(planes[y0 >= 48], mesh.inv_depth_planes[y0 >= 48]) or np.max(after[y0 >= 48]) < 1e-6
+
+
+def test_accepted_planes_stay_near_every_own_pixels_bin():
+    """Noisy codes (no smooth surface): every plane it replaces lies within half a code plus
+    ACCEPT_CODES of each of its quad's codes; the others are left exactly as they were."""
+    rng = np.random.default_rng(3)
+    disparity = 20 + rng.normal(0, 1.2, (H, W))
+    depth = _codes(disparity)
+    mesh = _grid_mesh(depth)
+    planes, fitted = fit_planes_in_code_bins(mesh, depth)
+    codes = BF / depth
+    for (x0, y0, x1, y1), p, f, old in zip(mesh.rects, planes, fitted, mesh.inv_depth_planes):
+        if not f:
+            assert np.array_equal(p, old)
+            continue
+        v, u = np.mgrid[y0:y1, x0:x1]
+        assert np.abs(BF * (p[0] * u + p[1] * v + p[2]) - codes[y0:y1, x0:x1]).max() <= 0.5 + ACCEPT_CODES + 1e-9
+
+
+def test_only_the_chosen_quads_change_and_invalid_depth_is_not_used():
+    u, v = _uv()
+    disparity = 20.3 + 0.06 * u
+    depth = _codes(disparity)
+    depth[:, :8] = np.nan  # no depth in the first column of quads
+    mesh = _grid_mesh(depth)
+    chosen = np.zeros(len(mesh.rects), bool)
+    chosen[::2] = True
+    planes, fitted = fit_planes_in_code_bins(mesh, depth, chosen)
+    assert not fitted[~chosen].any() and fitted[chosen].all()
+    assert np.array_equal(planes[~chosen], mesh.inv_depth_planes[~chosen])
+    assert np.isfinite(planes).all()
+
+
+def test_a_mesh_from_build_mesh_on_real_codes():
+    """build_mesh's own mesh of a quantized tilted plane: the planes it replaces are closer to
+    the truth than its least-squares planes on the codes."""
+    u, v = _uv()
+    disparity = 12.4 + 0.11 * u - 0.03 * v
+    depth = _codes(disparity)
+    camera = Camera(fx=BF, fy=BF, cx=W / 2, cy=H / 2, width=W, height=H)
+    mesh = build_mesh(View(np.zeros((H, W, 3), np.uint8), depth, camera, "tilted"), quantization=QUANT)
+    planes, fitted = fit_planes_in_code_bins(mesh, depth)
+    before = _plane_error(mesh.inv_depth_planes, mesh.rects, disparity)
+    after = _plane_error(planes, mesh.rects, disparity)
+    assert np.mean(after[fitted]) <= np.mean(before[fitted]) + 1e-3
+
+
+@pytest.mark.parametrize("change, error, match", [
+    (lambda m, d, q: ("not a mesh", d, q), TypeError, "mesh: expected an ibr QuadMesh"),
+    (lambda m, d, q: (QuadMesh(m.camera, m.rects, m.inv_depth_planes, m.quad_of_pixel, {}), d, q),
+     ValueError, "mesh: built without a quantization"),
+    (lambda m, d, q: (m, d[:10], q), ValueError, "depth: expected shape"),
+    (lambda m, d, q: (m, np.rint(d).astype(np.int32), q), TypeError, "depth: expected a float array"),
+    (lambda m, d, q: (m, d, q[:3]), ValueError, "quads: expected a bool array"),
+    (lambda m, d, q: (m, d, q.astype(int)), ValueError, "quads: expected a bool array"),
+    (lambda m, d, q: (QuadMesh(m.camera, m.rects, m.inv_depth_planes, m.quad_of_pixel,
+                               {"quantization": DepthQuantization()}), d, q), ValueError, "mesh: its quantization"),
+])
+def test_bad_input_is_refused_by_name(change, error, match):
+    u, _ = _uv()
+    depth = _codes(20.3 + 0.06 * u)
+    mesh = _grid_mesh(depth)
+    args = change(mesh, depth, np.ones(len(mesh.rects), bool))
+    with pytest.raises(error, match=match):
+        fit_planes_in_code_bins(*args)
