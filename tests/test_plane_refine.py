@@ -143,12 +143,12 @@ def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
         is_coarse(0.5, 3.0, base, f)
 
 
-@pytest.mark.parametrize("scene, within", [("room", 0.3), ("clutter", 0.4)])
+@pytest.mark.parametrize("scene, within", [("room", 0.3), ("clutter", 0.35)])
 def test_8bit_disparity_renders_close_to_its_exact_depth(scene, within):
     """Issue 11's target (0.3 dB) on the bundled pairs re-encoded as 8-bit integer disparity
-    (their own baseline), t = .25/.5/.75, covered pixels: measured room -0.23 dB (-0.40 with the
-    code planes, -0.25 with only the colour fit), clutter -0.33 (-0.71, -0.56: the target not
-    met). At a source's own pose the source comes back exactly."""
+    (their own baseline), t = .25/.5/.75, covered pixels: measured room -0.22 dB (-0.40 with the
+    code planes, -0.25 with only the colour fit), clutter -0.297 (-0.71, -0.56; asserted with a
+    margin). At a source's own pose the source comes back exactly."""
     a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
     truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
     bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx

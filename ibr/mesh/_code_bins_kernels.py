@@ -157,15 +157,19 @@ def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after
                     target[j, i] = q[v, u] + min(max(r_codes, -0.5), 0.5) * step[v, u]
         if not np.isfinite(coef[0]):
             continue
-        # the plane of least squares of that surface over the quad's own pixels
+        # the plane of least squares of that surface over the quad's own pixels, kept if the
+        # surface explains each of their codes (a curved surface's plane may not)
         a3 = np.zeros((3, 3))
         b3 = np.zeros(3)
+        surface_ok = True
         for v in range(y0, y1):
             for u in range(x0, x1):
                 _terms((u - uc) / scale, (v - vc) / scale, t)
                 model = 0.0
                 for r in range(_N):
                     model += coef[r] * t[r]
+                if np.isfinite(q[v, u]) and abs(model - q[v, u]) > (0.5 + accept_codes) * step[v, u]:
+                    surface_ok = False
                 for r in range(3):
                     b3[r] += t[r] * model
                     for c in range(3):
@@ -174,13 +178,6 @@ def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after
         if not np.isfinite(p[0]):
             continue
         a_u, a_v = p[0] / scale, p[1] / scale
-        plane = np.array([a_u, a_v, p[2] - a_u * uc - a_v * vc])
-        ok = True
-        for v in range(y0, y1):
-            for u in range(x0, x1):
-                if np.isfinite(q[v, u]) and abs(plane[0] * u + plane[1] * v + plane[2] - q[v, u]) > (
-                        0.5 + accept_codes) * step[v, u]:
-                    ok = False
-        if ok:
-            out[n] = plane
+        if surface_ok:
+            out[n] = np.array([a_u, a_v, p[2] - a_u * uc - a_v * vc])
     return out

@@ -11,13 +11,14 @@ alternating projections: fit, move each pixel's target to the nearest point of i
 again (a surface through all the bins where one exists; the bins' boundaries are where the
 codes change). Pixels outside the quad more than :data:`REJECT_CODES` beyond their bin after
 :data:`REJECT_AFTER` rounds are left out (a crease, another surface at the same depth). The
-quad gets the least-squares plane of that surface over its own pixels, kept only if it stays
-within :data:`ACCEPT_CODES` of every own pixel's bin.
+quad gets the least-squares plane of that surface over its own pixels, kept only if the surface
+lies within :data:`ACCEPT_CODES` of every own pixel's bin (where the codes are not those of a
+smooth surface, the quad keeps its plane).
 
 Measured (``python -c "import bench_edges as be; be.section_quantized()"`` in ``benchmarks/``,
 8-bit disparity against the exact depth, after :mod:`ibr.render.plane_refine`'s colour fit of
-the large quads, for every quad it did not take): clutter -0.56 -> -0.33 dB (planes refitted on
-the exact depth for every quad: -0.19), room -0.25 -> -0.23; docs/edges.md section 3.
+the large quads, for every quad it did not take): clutter -0.56 -> -0.30 dB (planes refitted on
+the exact depth for every quad: -0.19), room -0.25 -> -0.22; docs/edges.md section 3.
 
 Conventions: pixel centres at integer (u, v); rects ``(x0, y0, x1, y1)`` with exclusive ends;
 planes of inverse planar depth ``1/z = a u + b v + c`` as in :class:`ibr.mesh.QuadMesh`.
@@ -32,8 +33,9 @@ from .quad_mesh import QuadMesh
 
 __all__ = ["ACCEPT_CODES", "GROW", "REJECT_AFTER", "REJECT_CODES", "SPAN_CODES", "fit_planes_in_code_bins"]
 
-#: Pixels up to this many 4-connected steps around a quad inform its surface (clutter
-#: -0.39 / -0.33 / -0.30 dB at 8 / 10 / 12 px, room -0.21 / -0.23 / -0.27).
+#: Pixels up to this many 4-connected steps around a quad inform its surface (measured with the
+#: plane, not the surface, tested: clutter -0.39 / -0.33 / -0.30 dB at 8 / 10 / 12 px, room
+#: -0.21 / -0.23 / -0.27; a trade between the scenes).
 GROW = 10
 #: A step between neighbours of more than this many codes ends the surface.
 SPAN_CODES = 1.5
@@ -42,8 +44,10 @@ SPAN_CODES = 1.5
 ITERATIONS = 20
 REJECT_AFTER = 4
 REJECT_CODES = 0.25
-#: The quad's plane must lie within this many codes of every own pixel's bin (the real
-#: motorcycle's small quads, whose surfaces are not smooth, drifted off the truth without it).
+#: The surface must lie within this many codes of every own pixel's bin (the real motorcycle's
+#: small quads, whose surfaces are not smooth, drifted off the truth without a test: 0.206 ->
+#: 0.215 px rms; testing the plane instead of the surface rejected the limbs' quads, whose planes
+#: cannot follow the curve: clutter -0.30 -> -0.33 dB).
 ACCEPT_CODES = 0.25
 #: Ridge on the normal equations, relative to their largest diagonal entry.
 RIDGE = 1e-9

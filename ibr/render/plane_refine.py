@@ -21,7 +21,7 @@ other unless it supersamples.
 
 Measured (``python benchmarks/bench_edges.py --quick``, section 3: 8-bit disparity against the
 exact depth, covered pixels, t = .25/.5/.75): room -0.40 -> -0.25 dB, clutter -0.71 -> -0.56;
-with the bins for the other quads (sixteenth session) room -0.23, clutter -0.33; docs/edges.md
+with the bins for the other quads (sixteenth session) room -0.22, clutter -0.30; docs/edges.md
 section 3 has the other scenes and what was tried.
 
 Conventions: pixel centres at integer (u, v); planes in inverse planar depth per source pixel;
