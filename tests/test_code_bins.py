@@ -10,7 +10,8 @@ from ibr.base.camera import Camera
 from ibr.base.depth import DepthQuantization
 from ibr.base.view import View
 from ibr.mesh import build_mesh
-from ibr.mesh.code_bins import fit_planes_in_code_bins
+from ibr.mesh import code_bins
+from ibr.mesh.code_bins import MAX_PIXELS, fit_planes_in_code_bins
 from ibr.mesh.quad_mesh import QuadMesh, fit_inv_depth_planes
 
 BF = 100.0  # baseline x focal length (px x scene units): disparity d = BF / z, one code = 1 px
@@ -107,6 +108,29 @@ def test_codes_of_no_smooth_surface_keep_their_planes():
         planes, fitted = fit_planes_in_code_bins(mesh, depth)
         assert share[0] <= fitted.mean() <= share[1]
         assert np.array_equal(planes[~fitted], mesh.inv_depth_planes[~fitted])
+
+
+def test_a_large_quad_is_fitted_on_a_random_share_of_its_window(monkeypatch):
+    """A 64 x 64 quad (its grown window clipped to the 80 x 64 image: 5120 pixels, more than
+    MAX_PIXELS) on a plane rising 0.03 code per pixel (two codes over the quad): within 0.02 code
+    of the truth (its least-squares plane on the codes 0.05), the same planes on every call, and
+    within 0.005 code of the fit on every pixel of the window."""
+    u, v = _uv()
+    disparity = 20.3 + 0.03 * u + 0.009 * v
+    depth = _codes(disparity)
+    mesh = _grid_mesh(depth, size=64)
+    big = (mesh.rects[:, 2] - mesh.rects[:, 0]) * (mesh.rects[:, 3] - mesh.rects[:, 1]) == 64 * 64
+    assert big.sum() == 1 and W * H > MAX_PIXELS
+    first, fitted = fit_planes_in_code_bins(mesh, depth)
+    again, _ = fit_planes_in_code_bins(mesh, depth)
+    assert fitted[big].all() and np.array_equal(first, again)
+    assert _plane_error(first[big], mesh.rects[big], disparity)[0] < 0.02
+    assert _plane_error(mesh.inv_depth_planes[big], mesh.rects[big], disparity)[0] > 0.04
+    monkeypatch.setattr(code_bins, "MAX_PIXELS", 10**9)
+    every, _ = fit_planes_in_code_bins(mesh, depth)
+    x0, y0, x1, y1 = mesh.rects[big][0]
+    corners = np.array([(x, y, 1) for x in (x0, x1 - 1) for y in (y0, y1 - 1)], float)
+    assert np.abs(BF * corners @ (every[big][0] - first[big][0])).max() < 0.005
 
 
 def test_only_the_chosen_quads_change_and_invalid_depth_is_not_used():

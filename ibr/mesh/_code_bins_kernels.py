@@ -103,58 +103,83 @@ def _region(q, step, x0, y0, x1, y1, grow, span):
 
 
 @njit(cache=True)
+def _sample(reach, max_pixels):
+    """(row, column) in the window of its reached pixels, or of a random share of about
+    ``max_pixels`` of them when there are more (random, not every k-th: a regular grid's phase
+    biases a fit)."""
+    wh, ww = reach.shape
+    count = 0
+    for j in range(wh):
+        for i in range(ww):
+            count += reach[j, i]
+    share = min(1.0, max_pixels / max(count, 1))
+    out = np.empty((count, 2), np.int64)
+    k = 0
+    for j in range(wh):
+        for i in range(ww):
+            if reach[j, i] and (share >= 1.0 or np.random.random() < share):
+                out[k, 0], out[k, 1] = j, i
+                k += 1
+    return out[:k]
+
+
+@njit(cache=True)
 def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after, reject_codes,
-                     accept_codes, ridge):
+                     accept_codes, ridge, max_pixels):
     """Planes ``q = a u + b v + c`` (uncentred pixel coordinates) for the ``quads`` (indices into
     ``rects``), NaN rows where no plane was accepted. See :func:`ibr.mesh.code_bins.fit_planes_in_code_bins`."""
+    np.random.seed(0)  # the same planes on every call
     out = np.full((len(quads), 3), np.nan)
     t = np.zeros(_N)
     for n in range(len(quads)):
         x0, y0, x1, y1 = rects[quads[n], 0], rects[quads[n], 1], rects[quads[n], 2], rects[quads[n], 3]
         wx0, wy0, reach = _region(q, step, x0, y0, x1, y1, grow, span)
         uc, vc = 0.5 * (x0 + x1 - 1), 0.5 * (y0 + y1 - 1)
-        wh, ww = reach.shape
-        scale = 0.5 * max(wh, ww)  # coordinates of order one: a well-conditioned normal matrix
-        weight = np.zeros((wh, ww))
-        target = np.zeros((wh, ww))
-        for j in range(wh):
-            for i in range(ww):
-                if reach[j, i]:
-                    weight[j, i] = 1.0 / step[wy0 + j, wx0 + i] ** 2  # least squares in codes
-                    target[j, i] = q[wy0 + j, wx0 + i]
+        scale = 0.5 * max(reach.shape[0], reach.shape[1])  # coordinates of order one: a well-conditioned system
+        pix = _sample(reach, max_pixels)
+        m = len(pix)
+        us, vs = np.empty(m), np.empty(m)
+        qs, steps, weight, target = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+        inside = np.empty(m, np.bool_)
+        for k in range(m):
+            v, u = wy0 + pix[k, 0], wx0 + pix[k, 1]
+            us[k], vs[k] = (u - uc) / scale, (v - vc) / scale
+            qs[k], steps[k] = q[v, u], step[v, u]
+            weight[k] = 1.0 / steps[k] ** 2  # least squares in codes
+            target[k] = qs[k]
+            inside[k] = x0 <= u < x1 and y0 <= v < y1
         coef = np.full(_N, np.nan)
         for it in range(iterations):
             a = np.zeros((_N, _N))
             b = np.zeros(_N)
-            for j in range(wh):
-                for i in range(ww):
-                    wt = weight[j, i]
-                    if wt == 0.0:
-                        continue
-                    _terms((wx0 + i - uc) / scale, (wy0 + j - vc) / scale, t)
-                    for r in range(_N):
-                        b[r] += wt * t[r] * target[j, i]
-                        for c in range(_N):
-                            a[r, c] += wt * t[r] * t[c]
+            for k in range(m):
+                wt = weight[k]
+                if wt == 0.0:
+                    continue
+                _terms(us[k], vs[k], t)
+                for r in range(_N):
+                    b[r] += wt * t[r] * target[k]
+                    for c in range(r + 1):
+                        a[r, c] += wt * t[r] * t[c]
+            for r in range(_N):
+                for c in range(r + 1, _N):
+                    a[r, c] = a[c, r]
             coef = _solve_ridge(a, b, _N, ridge)
             if not np.isfinite(coef[0]):
                 break
             # the surface projected into each pixel's bin (half a code either side of its code)
-            for j in range(wh):
-                for i in range(ww):
-                    if weight[j, i] == 0.0:
-                        continue
-                    v, u = wy0 + j, wx0 + i
-                    _terms((u - uc) / scale, (v - vc) / scale, t)
-                    model = 0.0
-                    for r in range(_N):
-                        model += coef[r] * t[r]
-                    r_codes = (model - q[v, u]) / step[v, u]
-                    inside = x0 <= u < x1 and y0 <= v < y1
-                    if it >= reject_after and not inside and abs(r_codes) > 0.5 + reject_codes:
-                        weight[j, i] = 0.0  # another surface (a crease, a neighbour at the same depth)
-                        continue
-                    target[j, i] = q[v, u] + min(max(r_codes, -0.5), 0.5) * step[v, u]
+            for k in range(m):
+                if weight[k] == 0.0:
+                    continue
+                _terms(us[k], vs[k], t)
+                model = 0.0
+                for r in range(_N):
+                    model += coef[r] * t[r]
+                r_codes = (model - qs[k]) / steps[k]
+                if it >= reject_after and not inside[k] and abs(r_codes) > 0.5 + reject_codes:
+                    weight[k] = 0.0  # another surface (a crease, a neighbour at the same depth)
+                    continue
+                target[k] = qs[k] + min(max(r_codes, -0.5), 0.5) * steps[k]
         if not np.isfinite(coef[0]):
             continue
         # the plane of least squares of that surface over the quad's own pixels, kept if the
