@@ -282,7 +282,7 @@ def colour_planes_only():
     """Quads of quantized depth fitted to the other view's colour only, the others kept on their
     codes (before :mod:`ibr.mesh.code_bins`, sixteenth session)."""
     saved = plane_refine.fit_planes_in_code_bins
-    plane_refine.fit_planes_in_code_bins = lambda mesh, depth, quads: (mesh.inv_depth_planes,
+    plane_refine.fit_planes_in_code_bins = lambda mesh, depth, quads=None: (mesh.inv_depth_planes,
                                                                       np.zeros(len(mesh.rects), bool))
     try:
         yield
