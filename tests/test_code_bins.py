@@ -95,6 +95,30 @@ def test_a_crease_and_a_depth_edge_do_not_bend_the_plane_beside_them():
     assert np.array_equal(planes[y0 >= 48], mesh.inv_depth_planes[y0 >= 48]) or np.max(after[y0 >= 48]) < 1e-6
 
 
+def test_depth_in_codes_of_5_cm_far_from_the_camera():
+    """Planar depth stored in codes of 5 cm (uniform in z, not in 1/z) on a tilted plane 7.8-8 m
+    away (6 codes): the bins work in inverse depth with each pixel's own step; the planes'
+    mean error falls from 0.23 to 0.09 code."""
+    u, v = _uv()
+    z = 1.0 / (1 / 8.0 + 0.00004 * u + 0.00001 * v)
+    stored = (np.rint(z / 0.05) * 0.05).astype(np.float32)
+    grid = _grid_mesh(stored)
+    mesh = QuadMesh(grid.camera, grid.rects, grid.inv_depth_planes, grid.quad_of_pixel,
+                    {"quantization": DepthQuantization.codes(0.05)})
+    planes, fitted = fit_planes_in_code_bins(mesh, stored)
+
+    def error(p):  # rms error of each quad's plane, in codes of 5 cm
+        out = []
+        for (x0, y0, x1, y1), pl in zip(mesh.rects, p):
+            vv, uu = np.mgrid[y0:y1, x0:x1]
+            out.append(np.sqrt(np.mean((1 / (pl[0] * uu + pl[1] * vv + pl[2]) - z[y0:y1, x0:x1]) ** 2)) / 0.05)
+        return np.array(out)
+
+    assert fitted.all()
+    assert np.mean(error(planes)) < 0.5 * np.mean(error(mesh.inv_depth_planes))
+    assert np.max(error(planes)) <= np.max(error(mesh.inv_depth_planes))
+
+
 def test_codes_of_no_smooth_surface_keep_their_planes():
     """Noisy codes (a code's worth of noise on a plane): no quadratic surface lies within a
     quarter code of every bin of a quad, so (nearly) every quad keeps its plane exactly; on the
