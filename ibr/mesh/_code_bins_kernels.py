@@ -200,9 +200,7 @@ def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after
                     for c in range(3):
                         a3[r, c] += t[r] * t[c]
         p = _solve_ridge(a3, b3, 3, ridge)
-        if not np.isfinite(p[0]):
-            continue
-        a_u, a_v = p[0] / scale, p[1] / scale
-        if surface_ok:
+        if surface_ok and np.isfinite(p[0]):
+            a_u, a_v = p[0] / scale, p[1] / scale
             out[n] = np.array([a_u, a_v, p[2] - a_u * uc - a_v * vc])
     return out

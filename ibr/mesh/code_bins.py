@@ -31,7 +31,7 @@ import numpy as np
 from ..base.depth import DepthQuantization
 from .quad_mesh import QuadMesh
 
-__all__ = ["ACCEPT_CODES", "GROW", "REJECT_AFTER", "REJECT_CODES", "SPAN_CODES", "fit_planes_in_code_bins"]
+__all__ = ["ACCEPT_CODES", "GROW", "MAX_PIXELS", "REJECT_AFTER", "REJECT_CODES", "SPAN_CODES", "fit_planes_in_code_bins"]
 
 #: Pixels up to this many 4-connected steps around a quad inform its surface (measured with the
 #: plane, not the surface, tested: clutter -0.39 / -0.33 / -0.30 dB at 8 / 10 / 12 px, room
