@@ -213,6 +213,9 @@ FRAME_KERNELS = ("ibr.mesh._segment_kernels", "ibr.render._raster_kernels", "ibr
 #: ... and with ``--antialias`` (compiled by the main process: the first-run helper compiling them
 #: too made every first run ~0.9 s longer, #13)
 EDGE_KERNELS = ("ibr.render._edge_kernels",)
+#: ... and for sources whose depth is in coarse codes (compiled by the main process when it
+#: builds their meshes; told apart once the views are read)
+CODE_BIN_KERNELS = ("ibr.mesh._code_bins_kernels",)
 
 
 def first_run_kernels(args):
@@ -390,7 +393,7 @@ def run(args) -> int:
         sheet = plan.add_file("--contact-sheet", args.contact_sheet, (".png", ".jpg", ".jpeg", ".tif", ".tiff"))
         plan.check()  # every output checked before any work (#12)
         # imported after cli.main started the first-run helper: numba's import (0.3 s) overlaps it
-        from ibr.render.view_synthesis import interpolation_meshes, iter_interpolate
+        from ibr.render.view_synthesis import coarse_sources, interpolation_meshes, iter_interpolate
 
         view_a, view_b = _check_pair(path_a, load_view(path_a), path_b, load_view(path_b), args.method)
         # the inputs read: say that numba compiles (not before a view without depth is refused)
@@ -399,7 +402,10 @@ def run(args) -> int:
         compiling = note_first_run(*modules, warm=warm, announce=with_depth)
 
         if args.method == "mesh" and args.supersample == 1:  # supersampled: meshes of the upsampled
-            t0 = time.perf_counter()                           # sources, built with the first frame
+            if with_depth and any(coarse_sources(view_a, view_b)):  # sources, built with the first frame
+                # depth in coarse codes: the codes' bins kernel compiles here, once (about 4 s)
+                compiling = note_first_run(*modules, *CODE_BIN_KERNELS, warm=warm, announce=not compiling) or compiling
+            t0 = time.perf_counter()
             mesh_a, mesh_b = interpolation_meshes(view_a, view_b, ts)
             n_fitted = [m.info.get("refined_quads", 0) for m in (mesh_a, mesh_b)]
             n_binned = [m.info.get("bin_fitted_quads", 0) for m in (mesh_a, mesh_b)]

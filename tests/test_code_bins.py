@@ -11,7 +11,7 @@ from ibr.base.depth import DepthQuantization
 from ibr.base.view import View
 from ibr.mesh import build_mesh
 from ibr.mesh import code_bins
-from ibr.mesh.code_bins import MAX_PIXELS, fit_planes_in_code_bins
+from ibr.mesh.code_bins import MAX_WINDOW_PIXELS, fit_planes_in_code_bins
 from ibr.mesh.quad_mesh import QuadMesh, fit_inv_depth_planes
 
 BF = 100.0  # baseline x focal length (px x scene units): disparity d = BF / z, one code = 1 px
@@ -32,7 +32,10 @@ def _grid_mesh(depth, size=8) -> QuadMesh:
 
 
 def _codes(disparity) -> np.ndarray:
-    return (BF / np.rint(disparity)).astype(np.float32)
+    """Planar depth of integer disparity codes (no depth, inf, where the code is 0 or below)."""
+    codes = np.rint(disparity)
+    with np.errstate(divide="ignore"):
+        return np.where(codes > 0, BF / codes, np.inf).astype(np.float32)
 
 
 def _plane_error(planes, rects, disparity) -> np.ndarray:
@@ -136,7 +139,7 @@ def test_codes_of_no_smooth_surface_keep_their_planes():
 
 def test_a_large_quad_is_fitted_on_a_random_share_of_its_window(monkeypatch):
     """A 64 x 64 quad (its grown window clipped to the 80 x 64 image: 5120 pixels, more than
-    MAX_PIXELS) on a plane rising 0.03 code per pixel (two codes over the quad): within 0.02 code
+    MAX_WINDOW_PIXELS) on a plane rising 0.03 code per pixel (two codes over the quad): within 0.02 code
     of the truth (its least-squares plane on the codes 0.05), the same planes on every call, and
     within 0.005 code of the fit on every pixel of the window."""
     u, v = _uv()
@@ -144,17 +147,70 @@ def test_a_large_quad_is_fitted_on_a_random_share_of_its_window(monkeypatch):
     depth = _codes(disparity)
     mesh = _grid_mesh(depth, size=64)
     big = (mesh.rects[:, 2] - mesh.rects[:, 0]) * (mesh.rects[:, 3] - mesh.rects[:, 1]) == 64 * 64
-    assert big.sum() == 1 and W * H > MAX_PIXELS
+    assert big.sum() == 1 and W * H > MAX_WINDOW_PIXELS
     first, fitted = fit_planes_in_code_bins(mesh, depth)
     again, _ = fit_planes_in_code_bins(mesh, depth)
     assert fitted[big].all() and np.array_equal(first, again)
     assert _plane_error(first[big], mesh.rects[big], disparity)[0] < 0.02
     assert _plane_error(mesh.inv_depth_planes[big], mesh.rects[big], disparity)[0] > 0.04
-    monkeypatch.setattr(code_bins, "MAX_PIXELS", 10**9)
+    monkeypatch.setattr(code_bins, "MAX_WINDOW_PIXELS", 10**9)
     every, _ = fit_planes_in_code_bins(mesh, depth)
+    assert not np.array_equal(every[big], first[big])  # the share was a share
     x0, y0, x1, y1 = mesh.rects[big][0]
     corners = np.array([(x, y, 1) for x in (x0, x1 - 1) for y in (y0, y1 - 1)], float)
     assert np.abs(BF * corners @ (every[big][0] - first[big][0])).max() < 0.005
+
+
+def test_a_quad_over_a_hole_in_the_depth_is_fitted_on_its_valid_pixels():
+    """A hand-built quad whose middle has no depth (NaN, 0, inf): fitted from the pixels that
+    have it, the plane as good as on the same quad without the hole."""
+    u, v = _uv()
+    disparity = 20.3 + 0.06 * u + 0.02 * v
+    depth = _codes(disparity)
+    holed = depth.copy()
+    holed[20:24, 20:22], holed[20:24, 22], holed[20:24, 23] = np.nan, 0.0, np.inf
+    full, _ = fit_planes_in_code_bins(_grid_mesh(depth), depth)
+    mesh = _grid_mesh(depth)  # the rects of the full depth: one quad covers the hole
+    planes, fitted = fit_planes_in_code_bins(mesh, holed)
+    at = np.flatnonzero((mesh.rects[:, 0] == 16) & (mesh.rects[:, 1] == 16))[0]
+    assert fitted[at] and np.isfinite(planes).all()
+    error = _plane_error(planes, mesh.rects, disparity)
+    assert error[at] < _plane_error(full, mesh.rects, disparity)[at] + 0.02 and error[at] < 0.1
+
+
+def test_integer_codes_give_the_planes_of_the_same_codes_as_floats():
+    """Depth in integer millimetre codes (uint16) against the same values as float32 metres:
+    the same planes to a hundredth of a code."""
+    u, v = _uv()
+    mm = np.rint(3000 + 7 * u + 2 * v).astype(np.uint16)
+    grid = _grid_mesh(mm.astype(np.float32) / 1000)
+    planes = []
+    for depth, scale in ((mm, 1.0), (mm.astype(np.float32) / 1000, 0.001)):
+        per_m = 1000.0 if scale == 1.0 else 1.0  # inverse depth in 1/mm is 1/1000 of that in 1/m
+        mesh = QuadMesh(grid.camera, grid.rects, grid.inv_depth_planes / per_m, grid.quad_of_pixel,
+                        {"quantization": DepthQuantization.codes(scale)})
+        got, fitted = fit_planes_in_code_bins(mesh, depth)
+        assert fitted.mean() > 0.9
+        planes.append(got * per_m)
+    corners = np.array([(x, y, 1.0) for x0, y0, x1, y1 in grid.rects for x in (x0, x1 - 1) for y in (y0, y1 - 1)])
+    quad = np.repeat(np.arange(len(grid.rects)), 4)
+    q_int, q_float = (np.einsum("ij,ij->i", p[quad], corners) for p in planes)
+    step = 0.001 * q_float**2  # one millimetre in inverse depth (1/m)
+    assert np.abs(q_int - q_float).max() < 0.01 * step.min()  # float32 metres round below 0.001 mm
+
+
+def test_a_quads_plane_does_not_depend_on_which_others_are_fitted(monkeypatch):
+    """With a small window budget every quad is fitted on a random share; each quad draws its
+    own, so fitting it alone gives the same plane as fitting it with all the others."""
+    monkeypatch.setattr(code_bins, "MAX_WINDOW_PIXELS", 100)
+    u, v = _uv()
+    depth = _codes(20.3 + 0.06 * u + 0.02 * v)
+    mesh = _grid_mesh(depth)
+    together, _ = fit_planes_in_code_bins(mesh, depth)
+    for i in (0, 7, len(mesh.rects) - 1):
+        alone = np.zeros(len(mesh.rects), bool)
+        alone[i] = True
+        assert np.array_equal(fit_planes_in_code_bins(mesh, depth, alone)[0][i], together[i])
 
 
 def test_only_the_chosen_quads_change_and_invalid_depth_is_not_used():
@@ -171,30 +227,39 @@ def test_only_the_chosen_quads_change_and_invalid_depth_is_not_used():
     assert np.isfinite(planes).all()
 
 
-def test_a_mesh_from_build_mesh_on_real_codes():
-    """build_mesh's own mesh of a quantized tilted plane: the planes it replaces are closer to
-    the truth than its least-squares planes on the codes."""
+def test_build_mesh_s_own_meshes_of_codes():
+    """build_mesh's mesh of a quantized paraboloid (90 quads, whose planes approximate the curve
+    within the tolerance): their mean error falls by more than 0.02 code; of a tilted plane (one
+    quad across nine codes, which pin it: 0.002 code): kept within 0.005 code."""
     u, v = _uv()
-    disparity = 12.4 + 0.11 * u - 0.03 * v
-    depth = _codes(disparity)
     camera = Camera(fx=BF, fy=BF, cx=W / 2, cy=H / 2, width=W, height=H)
-    mesh = build_mesh(View(np.zeros((H, W, 3), np.uint8), depth, camera, "tilted"), quantization=QUANT)
-    planes, fitted = fit_planes_in_code_bins(mesh, depth)
-    before = _plane_error(mesh.inv_depth_planes, mesh.rects, disparity)
-    after = _plane_error(planes, mesh.rects, disparity)
-    assert np.mean(after[fitted]) <= np.mean(before[fitted]) + 1e-3
+    for disparity, curved in ((26.0 - 0.02 * ((u - 40) ** 2 + (v - 32) ** 2), True),
+                              (12.4 + 0.11 * u - 0.03 * v, False)):
+        depth = _codes(disparity)
+        mesh = build_mesh(View(np.zeros((H, W, 3), np.uint8), depth, camera, "codes"), quantization=QUANT)
+        planes, fitted = fit_planes_in_code_bins(mesh, depth)
+        before = _plane_error(mesh.inv_depth_planes, mesh.rects, disparity)
+        after = _plane_error(planes, mesh.rects, disparity)
+        assert fitted.mean() > 0.5
+        if curved:
+            assert len(mesh) > 50 and np.mean(after) < np.mean(before) - 0.02
+        else:
+            assert len(mesh) == 1 and after[0] < 0.005
 
 
 @pytest.mark.parametrize("change, error, match", [
     (lambda m, d, q: ("not a mesh", d, q), TypeError, "mesh: expected an ibr QuadMesh"),
     (lambda m, d, q: (QuadMesh(m.camera, m.rects, m.inv_depth_planes, m.quad_of_pixel, {}), d, q),
      ValueError, "mesh: built without a quantization"),
-    (lambda m, d, q: (m, d[:10], q), ValueError, "depth: expected shape"),
-    (lambda m, d, q: (m, np.rint(d).astype(np.int32), q), TypeError, "depth: expected a float array"),
-    (lambda m, d, q: (m, d, q[:3]), ValueError, "quads: expected a bool array"),
-    (lambda m, d, q: (m, d, q.astype(int)), ValueError, "quads: expected a bool array"),
     (lambda m, d, q: (QuadMesh(m.camera, m.rects, m.inv_depth_planes, m.quad_of_pixel,
                                {"quantization": DepthQuantization()}), d, q), ValueError, "mesh: its quantization"),
+    (lambda m, d, q: (QuadMesh(m.camera, m.rects + [0, 0, 1, 0], m.inv_depth_planes, m.quad_of_pixel,
+                               m.info), d, q), ValueError, "rects: expected non-empty"),
+    (lambda m, d, q: (m, None, q), TypeError, "depth: expected an array"),
+    (lambda m, d, q: (m, d[:10], q), ValueError, "depth: expected shape"),
+    (lambda m, d, q: (m, d > 0, q), ValueError, "depth: expected dtype"),
+    (lambda m, d, q: (m, d, q[:3]), ValueError, "quads: expected shape"),
+    (lambda m, d, q: (m, d, q.astype(int)), ValueError, "quads: expected dtype"),
 ])
 def test_bad_input_is_refused_by_name(change, error, match):
     u, _ = _uv()

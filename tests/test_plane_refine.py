@@ -10,12 +10,13 @@ import pytest
 
 from ibr.base.depth import DepthQuantization, set_quantization
 from ibr.base.view import View
-from ibr.io import load_view
+from ibr.io import load_view, save_view
 from ibr.mesh import build_mesh
-from ibr.mesh.quad_mesh import mesh_depth
+from ibr.mesh.quad_mesh import QuadMesh, fit_inv_depth_planes, mesh_depth
+from ibr.render import plane_refine
 from ibr.render.plane_refine import COARSE_PX, is_coarse, refine_planes
 import cli
-from ibr.render.view_synthesis import _holds_dead_ref, _source, interpolate, interpolation_meshes
+from ibr.render.view_synthesis import _holds_dead_ref, _source, coarse_sources, interpolate, interpolation_meshes
 from ibr.synth import make_scene, render, scene_cameras
 from samples import DATA_DIR
 
@@ -74,6 +75,43 @@ def test_what_the_other_view_sees_in_front_is_left_out(plane_pair):
     assert np.abs(_code_error(occluded, a, bf)).max() < 0.03
     unmarked = refine_planes(mesh, ca, View(color, cb.depth, cb.camera, "b painted"))
     assert np.sqrt(np.mean(_code_error(unmarked, a, bf) ** 2)) > 0.15
+
+
+def test_quads_too_small_for_the_colour_fit_are_placed_in_the_codes_bins(plane_pair, monkeypatch):
+    """A mesh of 20 x 20 quads (large enough for the colour fit) on the left half and 8 x 8 ones
+    on the right: the large ones whose colour fit was kept keep those planes (the bins leave them
+    alone), the small ones get the bins' planes (``info["bin_fitted_quads"]``), at less than half
+    the error of their planes on the codes. The wall's
+    disparity (9.06-9.41) in codes of 0.05 px, so that it crosses a few codes."""
+    a, b, _, _, bf = plane_pair
+    h, w = a.shape
+    step = 0.05
+    tilted = [View(v.color, (bf / (np.rint(bf / v.depth / step) * step)).astype(np.float32), v.camera, v.name)
+              for v in (a, b)]
+    q = DepthQuantization.disparity(baseline=bf / a.camera.fx, focal_px=a.camera.fx, step=step)
+    truth = bf / a.depth / step  # in codes
+    rects = [(x, y, min(x + s, w), min(y + s, h)) for x0, x1, s in ((0, 80, 20), (80, w, 8))
+             for y in range(0, h, s) for x in range(x0, x1, s)]
+    rects = np.array(rects, np.int32)
+    qop = np.full((h, w), -1, np.int32)
+    for i, (x0, y0, x1, y1) in enumerate(rects):
+        qop[y0:y1, x0:x1] = i
+    mesh = QuadMesh(a.camera, rects, fit_inv_depth_planes(tilted[0].depth, rects), qop, {"quantization": q})
+    refined = refine_planes(mesh, *tilted)
+    monkeypatch.setattr(plane_refine, "fit_planes_in_code_bins",
+                        lambda m, depth, quads=None: (m.inv_depth_planes, np.zeros(len(m.rects), bool)))
+    colour_only = refine_planes(mesh, *tilted)
+    large = (rects[:, 2] - rects[:, 0]) * (rects[:, 3] - rects[:, 1]) >= plane_refine.MIN_AREA
+    coloured = np.any(colour_only.inv_depth_planes != mesh.inv_depth_planes, 1)
+    assert coloured[large].any() and not coloured[~large].any()
+    assert np.array_equal(refined.inv_depth_planes[coloured], colour_only.inv_depth_planes[coloured])
+    assert refined.info["refined_quads"] == coloured.sum()
+    assert refined.info["bin_fitted_quads"] >= (~large).sum() - 2
+
+    def error(m):  # rms disparity error of the small quads' planes (codes)
+        return np.sqrt(np.mean((bf / mesh_depth(m) / step - truth)[:, 80:] ** 2))
+
+    assert error(refined) < 0.5 * error(mesh)
 
 
 def test_any_colour_layout_gives_the_same_plane(plane_pair):
@@ -221,6 +259,26 @@ def test_the_meshes_interpolate_uses_are_built_up_front_and_say_what_was_fitted(
             "codes' bins" in capsys.readouterr().err)
 
 
+def test_the_command_line_says_when_the_code_bins_kernel_compiles(plane_pair, tmp_path, monkeypatch, capsys):
+    """Only the codes' bins kernel is stale (as on a first run with 8-bit data): `ibr interpolate`
+    says it compiles where the sources' codes are coarse, and nothing for exact depth."""
+    from commands import _common
+
+    monkeypatch.setenv("IBR_NO_WARMUP", "1")
+    monkeypatch.setattr(_common, "_stale_kernels", lambda name: name == "ibr.mesh._code_bins_kernels")
+    a, b, _, _, bf = plane_pair
+    pa, pb = _write_8bit_disparity_pair(tmp_path, (a, b), bf)
+    assert coarse_sources(load_view(pa), load_view(pb)) == (True, True)
+    assert cli.main(["interpolate", str(pa), str(pb), "--t", "0.5", "--out", str(tmp_path / "coded")]) == 0
+    assert "compiling the numba kernels" in capsys.readouterr().err
+    exact = [tmp_path / "exact_a.json", tmp_path / "exact_b.json"]
+    for v, p in zip((a, b), exact):
+        save_view(v, p)
+    assert coarse_sources(a, b) == (False, False)
+    assert cli.main(["interpolate", *map(str, exact), "--t", "0.5", "--out", str(tmp_path / "exact")]) == 0
+    assert "compiling" not in capsys.readouterr().err
+
+
 def test_interpolation_meshes_refuses_what_interpolate_refuses(plane_pair):
     a, b, _, _, _ = plane_pair
     with pytest.raises(TypeError, match="view_a"):
@@ -236,3 +294,14 @@ def test_interpolation_meshes_refuses_what_interpolate_refuses(plane_pair):
         interpolation_meshes(a, small, 0.5)
     with pytest.raises(ValueError, match="view_b: size 80x60 differs"):
         interpolate(a, small, 0.5)
+
+
+def test_coarse_sources_refuses_what_interpolate_refuses(plane_pair):
+    a, b, _, _, _ = plane_pair
+    with pytest.raises(TypeError, match="view_a"):
+        coarse_sources(a.color, b)
+    with pytest.raises(ValueError, match="mesh_options"):
+        coarse_sources(a, b, mesh_options={"quantisation": None})
+    small = View(b.color[:60, :80], b.depth[:60, :80], b.camera.resized(80, 60), "small")
+    with pytest.raises(ValueError, match="view_b: size 80x60 differs"):
+        coarse_sources(a, small)

@@ -28,7 +28,8 @@ def _terms(du, dv, out):
 def _solve_ridge(a, b, n, ridge):
     """Solve (a + ridge (diag(a) + max(diag) I)) x = b for the symmetric positive semi-definite
     n x n ``a`` by Cholesky (the tiny ridge keeps degenerate directions, e.g. curvature across a
-    one-pixel line, at zero). Returns x, or NaNs if the system is empty."""
+    one-pixel line, at zero). Returns x, or NaNs if the system is empty or not positive
+    definite."""
     m = np.zeros((n, n))
     big = 0.0
     for i in range(n):
@@ -124,83 +125,106 @@ def _sample(reach, max_pixels):
 
 
 @njit(cache=True)
+def _surface_in_bins(us, vs, qs, steps, inside, iterations, reject_after, reject_codes, ridge):
+    """Coefficients (6,) of the quadratic surface through the bins of the pixels at scaled,
+    centred (us, vs) with stored inverse depth ``qs`` and code sizes ``steps``, by alternating
+    projections (module :mod:`ibr.mesh.code_bins`); pixels not ``inside`` the quad may be left
+    out as another surface. NaNs if the system is empty."""
+    m = len(us)
+    weight = 1.0 / steps**2  # least squares in codes
+    target = qs.copy()
+    t = np.zeros(_N)
+    coef = np.full(_N, np.nan)
+    for it in range(iterations):
+        a = np.zeros((_N, _N))
+        b = np.zeros(_N)
+        for k in range(m):
+            if weight[k] == 0.0:
+                continue
+            _terms(us[k], vs[k], t)
+            for r in range(_N):
+                b[r] += weight[k] * t[r] * target[k]
+                for c in range(r + 1):
+                    a[r, c] += weight[k] * t[r] * t[c]
+        for r in range(_N):
+            for c in range(r + 1, _N):
+                a[r, c] = a[c, r]
+        coef = _solve_ridge(a, b, _N, ridge)
+        if not np.isfinite(coef[0]) or it == iterations - 1:
+            break
+        # the surface projected into each pixel's bin (half a code either side of its code)
+        for k in range(m):
+            if weight[k] == 0.0:
+                continue
+            _terms(us[k], vs[k], t)
+            r_codes = (_dot(coef, t) - qs[k]) / steps[k]
+            if it >= reject_after and not inside[k] and abs(r_codes) > 0.5 + reject_codes:
+                weight[k] = 0.0  # another surface (a crease, a neighbour at the same depth)
+            else:
+                target[k] = qs[k] + min(max(r_codes, -0.5), 0.5) * steps[k]
+    return coef
+
+
+@njit(cache=True)
+def _dot(coef, t):
+    s = 0.0
+    for r in range(_N):
+        s += coef[r] * t[r]
+    return s
+
+
+@njit(cache=True)
+def _plane_of_surface(coef, q, step, x0, y0, x1, y1, uc, vc, scale, accept_codes):
+    """The least-squares plane ``q = a u + b v + c`` (uncentred pixel coordinates) of the surface
+    over the rect (closed form: over a full rect in centred coordinates the normal equations are
+    diagonal), and whether the surface lies within ``accept_codes`` of every valid own pixel's
+    bin."""
+    t = np.zeros(_N)
+    s_m = s_mu = s_mv = s_uu = s_vv = 0.0
+    ok = True
+    for v in range(y0, y1):
+        for u in range(x0, x1):
+            du, dv = u - uc, v - vc
+            _terms(du / scale, dv / scale, t)
+            model = _dot(coef, t)
+            if np.isfinite(q[v, u]) and abs(model - q[v, u]) > (0.5 + accept_codes) * step[v, u]:
+                ok = False
+            s_m += model
+            s_mu += model * du
+            s_mv += model * dv
+            s_uu += du * du
+            s_vv += dv * dv
+    a_u = s_mu / s_uu if s_uu > 0 else 0.0
+    a_v = s_mv / s_vv if s_vv > 0 else 0.0
+    c = s_m / ((x1 - x0) * (y1 - y0))
+    return np.array([a_u, a_v, c - a_u * uc - a_v * vc]), ok
+
+
+@njit(cache=True)
 def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after, reject_codes,
                      accept_codes, ridge, max_pixels):
     """Planes ``q = a u + b v + c`` (uncentred pixel coordinates) for the ``quads`` (indices into
     ``rects``), NaN rows where no plane was accepted. See :func:`ibr.mesh.code_bins.fit_planes_in_code_bins`."""
-    np.random.seed(0)  # the same planes on every call
     out = np.full((len(quads), 3), np.nan)
-    t = np.zeros(_N)
     for n in range(len(quads)):
+        np.random.seed(quads[n])  # a quad's plane does not depend on which others are fitted
         x0, y0, x1, y1 = rects[quads[n], 0], rects[quads[n], 1], rects[quads[n], 2], rects[quads[n], 3]
         wx0, wy0, reach = _region(q, step, x0, y0, x1, y1, grow, span)
         uc, vc = 0.5 * (x0 + x1 - 1), 0.5 * (y0 + y1 - 1)
         scale = 0.5 * max(reach.shape[0], reach.shape[1])  # coordinates of order one: a well-conditioned system
         pix = _sample(reach, max_pixels)
         m = len(pix)
-        us, vs = np.empty(m), np.empty(m)
-        qs, steps, weight, target = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+        us, vs, qs, steps = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
         inside = np.empty(m, np.bool_)
         for k in range(m):
             v, u = wy0 + pix[k, 0], wx0 + pix[k, 1]
             us[k], vs[k] = (u - uc) / scale, (v - vc) / scale
             qs[k], steps[k] = q[v, u], step[v, u]
-            weight[k] = 1.0 / steps[k] ** 2  # least squares in codes
-            target[k] = qs[k]
             inside[k] = x0 <= u < x1 and y0 <= v < y1
-        coef = np.full(_N, np.nan)
-        for it in range(iterations):
-            a = np.zeros((_N, _N))
-            b = np.zeros(_N)
-            for k in range(m):
-                wt = weight[k]
-                if wt == 0.0:
-                    continue
-                _terms(us[k], vs[k], t)
-                for r in range(_N):
-                    b[r] += wt * t[r] * target[k]
-                    for c in range(r + 1):
-                        a[r, c] += wt * t[r] * t[c]
-            for r in range(_N):
-                for c in range(r + 1, _N):
-                    a[r, c] = a[c, r]
-            coef = _solve_ridge(a, b, _N, ridge)
-            if not np.isfinite(coef[0]):
-                break
-            # the surface projected into each pixel's bin (half a code either side of its code)
-            for k in range(m):
-                if weight[k] == 0.0:
-                    continue
-                _terms(us[k], vs[k], t)
-                model = 0.0
-                for r in range(_N):
-                    model += coef[r] * t[r]
-                r_codes = (model - qs[k]) / steps[k]
-                if it >= reject_after and not inside[k] and abs(r_codes) > 0.5 + reject_codes:
-                    weight[k] = 0.0  # another surface (a crease, a neighbour at the same depth)
-                    continue
-                target[k] = qs[k] + min(max(r_codes, -0.5), 0.5) * steps[k]
+        coef = _surface_in_bins(us, vs, qs, steps, inside, iterations, reject_after, reject_codes, ridge)
         if not np.isfinite(coef[0]):
             continue
-        # the plane of least squares of that surface over the quad's own pixels, kept if the
-        # surface explains each of their codes (a curved surface's plane may not)
-        a3 = np.zeros((3, 3))
-        b3 = np.zeros(3)
-        surface_ok = True
-        for v in range(y0, y1):
-            for u in range(x0, x1):
-                _terms((u - uc) / scale, (v - vc) / scale, t)
-                model = 0.0
-                for r in range(_N):
-                    model += coef[r] * t[r]
-                if np.isfinite(q[v, u]) and abs(model - q[v, u]) > (0.5 + accept_codes) * step[v, u]:
-                    surface_ok = False
-                for r in range(3):
-                    b3[r] += t[r] * model
-                    for c in range(3):
-                        a3[r, c] += t[r] * t[c]
-        p = _solve_ridge(a3, b3, 3, ridge)
-        if surface_ok and np.isfinite(p[0]):
-            a_u, a_v = p[0] / scale, p[1] / scale
-            out[n] = np.array([a_u, a_v, p[2] - a_u * uc - a_v * vc])
+        plane, ok = _plane_of_surface(coef, q, step, x0, y0, x1, y1, uc, vc, scale, accept_codes)
+        if ok:
+            out[n] = plane
     return out

@@ -30,6 +30,7 @@ _EXPORTS = {
     "interpolate": "view_synthesis",
     "iter_interpolate": "view_synthesis",
     "interpolation_meshes": "view_synthesis",
+    "coarse_sources": "view_synthesis",
     "source_mesh": "view_synthesis",
     "warp": "view_synthesis",
     "viewpoint_weights": "composite",

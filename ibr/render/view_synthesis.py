@@ -40,6 +40,7 @@ from ..base.view import View, no_valid_depth_message
 __all__ = [
     "INTERPOLATIONS",
     "check_antialias",
+    "coarse_sources",
     "METHODS",
     "Rendering",
     "interpolate",
@@ -846,6 +847,18 @@ def _pair_mesh_options(view_a, view_b, cams, mesh_options: dict, lod: str, *, pa
     where the depth's codes are coarse (:func:`_with_partners`)."""
     opts = [_lod_options(v, cams, mesh_options, lod) for v in (view_a, view_b)]
     return _with_partners([view_a, view_b], opts) if partners else opts
+
+
+def coarse_sources(view_a: View, view_b: View, *, mesh_options: dict | None = None) -> tuple[bool, bool]:
+    """Whether each source's depth is stored in codes coarse over the pair's baseline (one code
+    moves a point at the source's median depth by :data:`ibr.render.plane_refine.COARSE_PX` or
+    more: the quantization of ``mesh_options`` or the one :func:`ibr.io.load_view` recorded);
+    :func:`interpolate` fits such a source's planes to the other's colour and the codes' bins
+    (:mod:`ibr.render.plane_refine`). ``view_a``, ``view_b`` and ``mesh_options`` as in
+    :func:`interpolate`."""
+    _check_pair(view_a, view_b)
+    opts = check_mesh_options(mesh_options)
+    return tuple(_PARTNER in o for o in _with_partners([view_a, view_b], [opts, opts]))
 
 
 def interpolation_meshes(view_a: View, view_b: View, t, *, mesh_options: dict | None = None,
