@@ -119,8 +119,8 @@ def refine_planes(mesh: QuadMesh, view: View, other: View) -> QuadMesh:
                         {**mesh.info, "refined_quads": 0, "bin_fitted_quads": 0})
     px = _interior_pixels(mesh, _quads_to_fit(mesh, view.depth, quant))
     planes, keep = _fit_to_colour(mesh, view, other, px)
-    coloured = QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel, mesh.info)
-    planes, in_bins = fit_planes_in_code_bins(coloured, view.depth, ~keep)
+    binned, in_bins = fit_planes_in_code_bins(mesh, view.depth, ~keep)
+    planes = np.where(in_bins[:, None], binned, planes)
     info = {**mesh.info, "refined_quads": int(keep.sum()), "bin_fitted_quads": int(in_bins.sum())}
     return QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel, info)
 
