@@ -409,9 +409,11 @@ def run(args) -> int:
             mesh_a, mesh_b = interpolation_meshes(view_a, view_b, ts)
             n_fitted = [m.info.get("refined_quads", 0) for m in (mesh_a, mesh_b)]
             n_binned = [m.info.get("bin_fitted_quads", 0) for m in (mesh_a, mesh_b)]
+            n_split = [m.info.get("bin_split_quads", 0) for m in (mesh_a, mesh_b)]
             fitted = (f" (coarse depth codes: planes of {n_fitted[0]} + {n_fitted[1]} large quads fitted to the "
                       f"other view's colour, of {n_binned[0]} + {n_binned[1]} more placed inside the codes' bins "
-                      "around them)") if any(n_fitted + n_binned) else ""
+                      f"around them, {n_split[0]} + {n_split[1]} of these split where one plane does not follow "
+                      "the bins)") if any(n_fitted + n_binned) else ""
             info(f"meshes: {len(mesh_a)} + {len(mesh_b)} quads{fitted}, built in "
                  f"{(time.perf_counter() - t0) * 1e3:.1f} ms (once, {'compiling' if compiling else 'loading'} the "
                  "segmentation kernels included; reused for every frame)")

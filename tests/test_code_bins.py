@@ -11,7 +11,7 @@ from ibr.base.depth import DepthQuantization
 from ibr.base.view import View
 from ibr.mesh import build_mesh
 from ibr.mesh import code_bins
-from ibr.mesh.code_bins import MAX_WINDOW_PIXELS, fit_planes_in_code_bins
+from ibr.mesh.code_bins import MAX_WINDOW_PIXELS, fit_mesh_in_code_bins, fit_planes_in_code_bins
 from ibr.mesh.quad_mesh import QuadMesh, fit_inv_depth_planes
 
 BF = 100.0  # baseline x focal length (px x scene units): disparity d = BF / z, one code = 1 px
@@ -292,10 +292,71 @@ def test_build_mesh_s_own_meshes_of_codes():
     (lambda m, d, q: (m, d, q[:3]), ValueError, "quads: expected shape"),
     (lambda m, d, q: (m, d, q.astype(int)), ValueError, "quads: expected dtype"),
 ])
-def test_bad_input_is_refused_by_name(change, error, match):
+@pytest.mark.parametrize("fit", [fit_planes_in_code_bins, fit_mesh_in_code_bins])
+def test_bad_input_is_refused_by_name(change, error, match, fit):
     u, _ = _uv()
     depth = _codes(20.3 + 0.06 * u)
     mesh = _grid_mesh(depth)
     args = change(mesh, depth, np.ones(len(mesh.rects), bool))
     with pytest.raises(error, match=match):
-        fit_planes_in_code_bins(*args)
+        fit(*args)
+
+
+@pytest.mark.parametrize("tolerance, error", [(-0.01, ValueError), (np.nan, ValueError), (np.inf, ValueError),
+                                              ("0.1", TypeError), (True, TypeError)])
+def test_a_bad_split_tolerance_is_refused_by_name(tolerance, error):
+    depth = _codes(20.3 + 0.06 * _uv()[0])
+    with pytest.raises(error, match="tolerance"):
+        fit_mesh_in_code_bins(_grid_mesh(depth), depth, tolerance=tolerance)
+
+
+def _with_tolerance(mesh, codes) -> QuadMesh:
+    """``mesh`` as build_mesh records it: a tolerance of ``codes`` disparity codes besides the
+    codes' half-code allowance."""
+    info = {**mesh.info, "tolerance_inv_depth": (codes + 0.5) / BF, "quantization_allowance_inv_depth": 0.5 / BF}
+    return QuadMesh(mesh.camera, mesh.rects, mesh.inv_depth_planes, mesh.quad_of_pixel, info)
+
+
+def _mesh_error(mesh, disparity) -> np.ndarray:
+    """Disparity error (codes) of the mesh's planes at every pixel with a quad."""
+    from ibr.mesh.quad_mesh import mesh_depth
+
+    return (BF / mesh_depth(mesh) - disparity)[mesh.quad_of_pixel >= 0]
+
+
+def test_a_quad_too_large_for_a_curve_is_split_until_its_parts_follow_it():
+    """A sphere's cap (disparity 8-26 codes) under 16 x 16 quads, a tolerance of 0.25 code
+    (0.075 with the default share): one plane per quad is up to a code off the cap near its
+    rim, so the curved quads are halved until each part's plane follows the surface the bins
+    allow; the parts tile their quad, and the mesh follows the true disparity far better than
+    the unsplit planes in the bins do."""
+    u, v = _uv()
+    disparity = 26.0 - 0.01 * ((u - 40) ** 2 + (v - 32) ** 2)
+    depth = _codes(disparity)
+    mesh = _with_tolerance(_grid_mesh(depth, size=16), 0.25)
+    split = fit_mesh_in_code_bins(mesh, depth)
+    planes, fitted = fit_planes_in_code_bins(mesh, depth)
+    unsplit = QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel, mesh.info)
+    assert split.info["bin_fitted_quads"] == fitted.sum() and split.info["bin_split_quads"] > 0.5 * len(mesh)
+    assert len(split) > 2 * len(mesh)
+    assert np.array_equal(split.quad_of_pixel >= 0, mesh.quad_of_pixel >= 0)  # the same pixels, once each
+    assert split.areas.sum() == mesh.areas.sum()
+    before, after = np.abs(_mesh_error(unsplit, disparity)), np.abs(_mesh_error(split, disparity))
+    assert np.sqrt(np.mean(after**2)) < 0.6 * np.sqrt(np.mean(before**2))
+    assert after.max() < 0.6 < before.max()
+
+
+def test_a_plane_in_codes_is_not_split_and_without_a_tolerance_nothing_is():
+    """A tilted plane at a tolerance of half a code: its quads' surfaces are planes to within
+    0.06 code (the bins allow some bend), so none is split; the sphere's cap of the test above with no tolerance recorded (a hand-built mesh)
+    is not split either, and gets the planes :func:`fit_planes_in_code_bins` gives."""
+    u, v = _uv()
+    plane = _codes(20.3 + 0.06 * u + 0.02 * v)
+    mesh = _with_tolerance(_grid_mesh(plane, size=16), 0.5)
+    got = fit_mesh_in_code_bins(mesh, plane)
+    assert len(got) == len(mesh) and got.info["bin_split_quads"] == 0 and got.info["bin_fitted_quads"] > 0
+    cap = _codes(26.0 - 0.01 * ((u - 40) ** 2 + (v - 32) ** 2))
+    bare = _grid_mesh(cap, size=16)
+    got = fit_mesh_in_code_bins(bare, cap)
+    assert len(got) == len(bare) and got.info["bin_split_quads"] == 0
+    assert np.array_equal(got.inv_depth_planes, fit_planes_in_code_bins(bare, cap)[0])

@@ -98,8 +98,7 @@ def test_quads_too_small_for_the_colour_fit_are_placed_in_the_codes_bins(plane_p
         qop[y0:y1, x0:x1] = i
     mesh = QuadMesh(a.camera, rects, fit_inv_depth_planes(tilted[0].depth, rects), qop, {"quantization": q})
     refined = refine_planes(mesh, *tilted)
-    monkeypatch.setattr(plane_refine, "fit_planes_in_code_bins",
-                        lambda m, depth, quads=None: (m.inv_depth_planes, np.zeros(len(m.rects), bool)))
+    monkeypatch.setattr(plane_refine, "fit_mesh_in_code_bins", lambda m, depth, quads=None: m)
     colour_only = refine_planes(mesh, *tilted)
     large = (rects[:, 2] - rects[:, 0]) * (rects[:, 3] - rects[:, 1]) >= plane_refine.MIN_AREA
     coloured = np.any(colour_only.inv_depth_planes != mesh.inv_depth_planes, 1)
@@ -181,12 +180,14 @@ def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
         is_coarse(0.5, 3.0, base, f)
 
 
-@pytest.mark.parametrize("scene, within", [("room", 0.3), ("clutter", 0.35)])
-def test_8bit_disparity_renders_close_to_its_exact_depth(scene, within):
-    """Issue 11's target (0.3 dB) on the bundled pairs re-encoded as 8-bit integer disparity
-    (their own baseline), t = .25/.5/.75, covered pixels: measured room -0.22 dB (-0.40 with the
-    code planes, -0.25 with only the colour fit), clutter -0.297 (-0.71, -0.56; asserted with a
-    margin). At a source's own pose the source comes back exactly."""
+@pytest.mark.parametrize("scene", ["room", "clutter"])
+def test_8bit_disparity_renders_close_to_its_exact_depth(scene):
+    """Issue 11's targets on the bundled pairs re-encoded as 8-bit integer disparity (their own
+    baseline), t = .25/.5/.75, covered pixels: within 0.3 dB of the exact depth's render
+    (measured room -0.17 dB: -0.40 with the code planes, -0.25 with only the colour fit, -0.22
+    with the bins unsplit; clutter -0.17: -0.71, -0.56, -0.297) with at most 1.5x the exact
+    depth's quads in the meshes rendered (room 1.42x / 1.09x, clutter 1.00x / 1.08x). At a
+    source's own pose the source comes back exactly."""
     a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
     truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
     bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx
@@ -200,7 +201,9 @@ def test_8bit_disparity_renders_close_to_its_exact_depth(scene, within):
 
     exact = psnr(interpolate(a, b, cams, fill="none"))
     quantized = psnr(interpolate(*codes, cams, fill="none", mesh_options={"quantization": q}))
-    assert quantized > exact - within
+    assert quantized > exact - 0.3
+    quads = [len(m) for m in interpolation_meshes(*codes, cams, mesh_options={"quantization": q})]
+    assert all(n <= 1.5 * len(m) for n, m in zip(quads, interpolation_meshes(a, b, cams)))
     own = interpolate(*codes, [0.0, 1.0], fill="none", mesh_options={"quantization": q})
     for r, v in zip(own, codes):
         assert np.array_equal(r.color[~r.holes], v.color[~r.holes])

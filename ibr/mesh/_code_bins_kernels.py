@@ -177,8 +177,8 @@ def _dot(coef, t):
 def _plane_of_surface(coef, q, step, x0, y0, x1, y1, uc, vc, scale, accept_codes):
     """The least-squares plane ``q = a u + b v + c`` (uncentred pixel coordinates) of the surface
     over the rect (closed form: over a full rect in centred coordinates the normal equations are
-    diagonal), and whether the surface lies within ``accept_codes`` of every valid own pixel's
-    bin."""
+    diagonal), whether the surface lies within ``accept_codes`` of every valid own pixel's bin,
+    and the largest distance (inverse depth) between the plane and the surface at those pixels."""
     t = np.zeros(_N)
     s_m = s_mu = s_mv = s_uu = s_vv = 0.0
     ok = True
@@ -197,15 +197,25 @@ def _plane_of_surface(coef, q, step, x0, y0, x1, y1, uc, vc, scale, accept_codes
     a_u = s_mu / s_uu if s_uu > 0 else 0.0
     a_v = s_mv / s_vv if s_vv > 0 else 0.0
     c = s_m / ((x1 - x0) * (y1 - y0))
-    return np.array([a_u, a_v, c - a_u * uc - a_v * vc]), ok
+    gap = 0.0
+    for v in range(y0, y1):
+        for u in range(x0, x1):
+            if np.isfinite(q[v, u]):
+                du, dv = u - uc, v - vc
+                _terms(du / scale, dv / scale, t)
+                gap = max(gap, abs(_dot(coef, t) - (a_u * du + a_v * dv + c)))
+    return np.array([a_u, a_v, c - a_u * uc - a_v * vc]), ok, gap
 
 
 @njit(cache=True)
 def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after, reject_codes,
                      accept_codes, ridge, max_pixels):
     """Planes ``q = a u + b v + c`` (uncentred pixel coordinates) for the ``quads`` (indices into
-    ``rects``), NaN rows where no plane was accepted. See :func:`ibr.mesh.code_bins.fit_planes_in_code_bins`."""
+    ``rects``), NaN rows where no plane was accepted, and for each the largest distance between
+    its plane and its surface at its pixels with depth (inverse depth; NaN where none). See
+    :func:`ibr.mesh.code_bins.fit_planes_in_code_bins`."""
     out = np.full((len(quads), 3), np.nan)
+    gaps = np.full(len(quads), np.nan)
     for n in range(len(quads)):
         np.random.seed(quads[n])  # a quad's plane does not depend on which others are fitted
         x0, y0, x1, y1 = rects[quads[n], 0], rects[quads[n], 1], rects[quads[n], 2], rects[quads[n], 3]
@@ -224,7 +234,7 @@ def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after
         coef = _surface_in_bins(us, vs, qs, steps, inside, iterations, reject_after, reject_codes, ridge)
         if not np.isfinite(coef[0]):
             continue
-        plane, ok = _plane_of_surface(coef, q, step, x0, y0, x1, y1, uc, vc, scale, accept_codes)
+        plane, ok, gap = _plane_of_surface(coef, q, step, x0, y0, x1, y1, uc, vc, scale, accept_codes)
         if ok:
-            out[n] = plane
-    return out
+            out[n], gaps[n] = plane, gap
+    return out, gaps

@@ -14,13 +14,17 @@ bins' boundaries are where the codes change). Pixels outside the quad more than
 another surface at the same depth). The quad gets the least-squares plane of that surface over
 its rect (the surface extrapolated over pixels without depth), kept only if the surface lies
 within :data:`ACCEPT_CODES` of every own pixel's bin (where the codes are not those of a smooth
-surface, the quad keeps its plane).
+surface, the quad keeps its plane). The codes' allowance lets the segmentation take a curve as one
+quad that the exact depth would have split (clutter: 1 250 quads against 1 455), so
+:func:`fit_mesh_in_code_bins` then halves a quad whose plane departs from its surface by more
+than a share of the exact depth's tolerance, and fits the halves again, until each part follows.
 
 Measured (``python -c "import bench_edges as be; be.section_quantized()"`` in ``benchmarks/``,
 8-bit disparity against the exact depth, after :mod:`ibr.render.plane_refine`'s colour fit of
 the large quads, for every quad it did not take): clutter -0.56 -> -0.30 dB (planes refitted on
-the exact depth for every quad under 200 px: -0.27), room -0.25 -> -0.22; docs/edges.md
-section 3.
+the exact depth for every quad under 200 px: -0.27), room -0.25 -> -0.22; split where a plane
+does not follow the bins: clutter -0.17, room -0.17 (the exact depth's planes on the codes' quads
+split to the exact tolerance: +0.02 / -0.03); docs/edges.md section 3.
 
 Conventions: pixel centres at integer (u, v); rects ``(x0, y0, x1, y1)`` with exclusive ends;
 planes of inverse planar depth ``1/z = a u + b v + c`` as in :class:`ibr.mesh.QuadMesh`.
@@ -31,11 +35,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..base.depth import DepthQuantization
-from ..base.validate import check_array
+from ..base.validate import check_array, check_finite_scalar
 from .quad_mesh import QuadMesh, _inv_depth
 
 __all__ = ["ACCEPT_CODES", "GROW", "ITERATIONS", "MAX_WINDOW_PIXELS", "REJECT_AFTER", "REJECT_CODES", "RIDGE",
-           "SURFACE_STEP_CODES", "fit_planes_in_code_bins"]
+           "SPLIT_SHARE", "SURFACE_STEP_CODES", "fit_mesh_in_code_bins", "fit_planes_in_code_bins"]
 
 #: Pixels up to this many 4-connected steps from a quad inform its surface (10 px: clutter
 #: -0.297 dB, room -0.223; with the plane rather than the surface tested, 8 / 10 / 12 px gave
@@ -59,6 +63,12 @@ RIDGE = 1e-9
 #: (the largest quads, whose many codes pin them anyway: 1.37 -> 0.48 s for a 1080p view's 1 197
 #: quads).
 MAX_WINDOW_PIXELS = 4096
+#: A fitted quad is halved (and its halves fitted again) while its plane departs from its surface
+#: by more than this share of the tolerance the mesh would have without the codes' allowance
+#: (8-bit disparity, clutter / room: no split -0.297 / -0.223 dB; 1.0 -0.29 / -0.18; 0.5 -0.20 /
+#: -0.17; 0.3 -0.17 / -0.17; 0.2 -0.26 / -0.16: the quadratic over the grown window is flatter
+#: than the curve it follows, so its gap understates the plane's error about twofold).
+SPLIT_SHARE = 0.3
 
 
 def fit_planes_in_code_bins(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarray, np.ndarray]:
@@ -82,7 +92,85 @@ def fit_planes_in_code_bins(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarr
     fitted : (Q,) bool
         The quads whose plane was replaced.
     """
-    from ._code_bins_kernels import fit_in_code_bins
+    planes, fitted, _ = _fit(mesh, depth, quads)
+    return planes, fitted
+
+
+def fit_mesh_in_code_bins(mesh: QuadMesh, depth, quads=None, *, tolerance=None) -> QuadMesh:
+    """``mesh`` with the ``quads`` placed inside the codes' bins, and split where one plane does
+    not follow the surface the bins allow.
+
+    Each chosen quad is fitted as by :func:`fit_planes_in_code_bins`; an accepted quad whose plane
+    departs from its surface by more than ``tolerance`` at one of its pixels is halved across its
+    longer side and each half fitted again the same way (its own surface, from the pixels around
+    it), until every part follows its surface or is one pixel. A part whose fit is not accepted
+    keeps the plane of the quad it came from.
+
+    Parameters
+    ----------
+    mesh, depth, quads
+        As for :func:`fit_planes_in_code_bins`.
+    tolerance : float, optional
+        Largest distance in inverse depth (1 / scene units) between a part's plane and its
+        surface; default :data:`SPLIT_SHARE` times the mesh's tolerance without the codes'
+        allowance (``mesh.info["tolerance_inv_depth"] - mesh.info["quantization_allowance_inv_depth"]``;
+        no split when the mesh has no such tolerance).
+
+    Returns
+    -------
+    QuadMesh
+        Same camera; the quads not split first (in their order), then the parts; ``info`` adds
+        ``"bin_fitted_quads"`` (quads of ``mesh`` whose plane, or a part's, came from the bins) and
+        ``"bin_split_quads"`` (quads of ``mesh`` split).
+    """
+    from ._segment_kernels import label_rects
+
+    _check_mesh(mesh)
+    tol = _split_tolerance(mesh, tolerance)
+    planes, fitted, gaps = _fit(mesh, depth, quads)
+    rects, origin = np.asarray(mesh.rects, np.int64), np.arange(len(mesh.rects))
+    done = []
+    while True:
+        halve = fitted & (gaps > tol) & ((rects[:, 2] - rects[:, 0]) * (rects[:, 3] - rects[:, 1]) > 1)
+        if not halve.any():
+            break
+        done.append((rects[~halve], planes[~halve], origin[~halve], fitted[~halve]))
+        rects, origin = _halves(rects[halve]), np.tile(origin[halve], 2)
+        inherited = np.tile(planes[halve], (2, 1))
+        parts = QuadMesh(mesh.camera, rects, inherited, label_rects(rects, *mesh.shape), mesh.info)
+        planes, fitted, gaps = _fit(parts, depth)
+        planes = np.where(fitted[:, None], planes, inherited)
+    done.append((rects, planes, origin, fitted))
+    rects, planes, origin, fitted = (np.concatenate(x) for x in zip(*done))
+    info = {**mesh.info, "bin_fitted_quads": len(np.unique(origin[fitted])),
+            "bin_split_quads": int(np.count_nonzero(np.bincount(origin, minlength=len(mesh.rects)) > 1))}
+    return QuadMesh(mesh.camera, rects, planes, label_rects(rects, *mesh.shape), info)
+
+
+def _split_tolerance(mesh: QuadMesh, tolerance) -> float:
+    if tolerance is not None:
+        tol = check_finite_scalar("tolerance", tolerance)
+        if tol < 0:
+            raise ValueError(f"tolerance: expected a distance in inverse depth >= 0, got {tolerance!r}")
+        return tol
+    own = mesh.info.get("tolerance_inv_depth")
+    if own is None:
+        return np.inf
+    return SPLIT_SHARE * (own - (mesh.info.get("quantization_allowance_inv_depth") or 0.0))
+
+
+def _halves(rects) -> np.ndarray:
+    """(2 N, 4) the rects halved across their longer side: all first halves, then all second."""
+    wide = rects[:, 2] - rects[:, 0] >= rects[:, 3] - rects[:, 1]
+    first, second = rects.copy(), rects.copy()
+    mid_u, mid_v = (rects[:, 0] + rects[:, 2]) // 2, (rects[:, 1] + rects[:, 3]) // 2
+    first[wide, 2] = second[wide, 0] = mid_u[wide]
+    first[~wide, 3] = second[~wide, 1] = mid_v[~wide]
+    return np.concatenate([first, second])
+
+
+def _check_mesh(mesh) -> DepthQuantization:
+    """The mesh's quantization, or an error naming ``mesh``."""
     from ._segment_kernels import check_rects_inside
 
     if not isinstance(mesh, QuadMesh):
@@ -92,6 +180,15 @@ def fit_planes_in_code_bins(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarr
         raise ValueError("mesh: built without a quantization (build_mesh(..., quantization=...)); "
                          "its depth has no code bins")
     check_rects_inside(mesh.rects, *mesh.shape)
+    return quant
+
+
+def _fit(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`fit_planes_in_code_bins`'s planes and fitted quads, and each fitted quad's largest
+    distance between plane and surface (NaN for the others)."""
+    from ._code_bins_kernels import fit_in_code_bins
+
+    quant = _check_mesh(mesh)
     q = _inv_depth(check_array("depth", depth, shape=mesh.shape, dtype_kind="fiu"))
     n = len(mesh.rects)
     chosen = np.ones(n, bool) if quads is None else check_array("quads", quads, shape=(n,), dtype_kind="b")
@@ -99,12 +196,14 @@ def fit_planes_in_code_bins(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarr
     if not (step > 0).all():
         raise ValueError(f"mesh: its quantization ({quant.describe()}) has no step at some depth of this view")
     idx = np.flatnonzero(chosen)
-    got = fit_in_code_bins(q, np.ascontiguousarray(step), np.ascontiguousarray(mesh.rects, np.int64),
-                           idx.astype(np.int64), GROW, SURFACE_STEP_CODES, ITERATIONS, REJECT_AFTER,
-                           REJECT_CODES, ACCEPT_CODES, RIDGE, MAX_WINDOW_PIXELS)
+    got, gap = fit_in_code_bins(q, np.ascontiguousarray(step), np.ascontiguousarray(mesh.rects, np.int64),
+                                idx.astype(np.int64), GROW, SURFACE_STEP_CODES, ITERATIONS, REJECT_AFTER,
+                                REJECT_CODES, ACCEPT_CODES, RIDGE, MAX_WINDOW_PIXELS)
     ok = np.isfinite(got).all(1)
     planes = np.array(mesh.inv_depth_planes, np.float64, copy=True)
     planes[idx[ok]] = got[ok]
     fitted = np.zeros(n, bool)
     fitted[idx[ok]] = True
-    return planes, fitted
+    gaps = np.full(n, np.nan)
+    gaps[idx[ok]] = gap[ok]
+    return planes, fitted, gaps

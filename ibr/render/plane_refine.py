@@ -36,7 +36,7 @@ import numpy as np
 from ..base.depth import DepthQuantization, quantization_of
 from ..base.validate import check_finite_scalar, check_positive
 from ..base.view import View
-from ..mesh.code_bins import fit_planes_in_code_bins
+from ..mesh.code_bins import fit_mesh_in_code_bins
 from ..mesh.quad_mesh import QuadMesh
 from .points import sample_points
 from .rasterize import src_from_tgt
@@ -105,24 +105,24 @@ def refine_planes(mesh: QuadMesh, view: View, other: View) -> QuadMesh:
     Returns
     -------
     QuadMesh
-        Same rects and pixel map; planes of quads of :data:`MIN_AREA` pixels or more within
-        :data:`SPAN_CODES` codes replaced where the fit matched ``other`` better and explains the
-        codes (module docstring), ``info["refined_quads"]`` of them; every other quad's plane
-        placed inside the bins of the codes around it where that works
-        (:func:`ibr.mesh.code_bins.fit_planes_in_code_bins`), ``info["bin_fitted_quads"]`` of
-        them (both 0 without a quantization).
+        Planes of quads of :data:`MIN_AREA` pixels or more within :data:`SPAN_CODES` codes
+        replaced where the fit matched ``other`` better and explains the codes (module
+        docstring), ``info["refined_quads"]`` of them; every other quad placed inside the bins
+        of the codes around it where that works, and split where one plane does not follow the
+        surface they allow (:func:`ibr.mesh.code_bins.fit_mesh_in_code_bins`),
+        ``info["bin_fitted_quads"]`` and ``info["bin_split_quads"]`` of them (all 0 without a
+        quantization, and the mesh then as it was).
     """
     _check_inputs(mesh, view, other)
     quant = mesh.info.get("quantization")
     if quant is None:
         return QuadMesh(mesh.camera, mesh.rects, mesh.inv_depth_planes, mesh.quad_of_pixel,
-                        {**mesh.info, "refined_quads": 0, "bin_fitted_quads": 0})
+                        {**mesh.info, "refined_quads": 0, "bin_fitted_quads": 0, "bin_split_quads": 0})
     px = _interior_pixels(mesh, _quads_to_fit(mesh, view.depth, quant))
     planes, keep = _fit_to_colour(mesh, view, other, px)
-    binned, in_bins = fit_planes_in_code_bins(mesh, view.depth, ~keep)
-    planes = np.where(in_bins[:, None], binned, planes)
-    info = {**mesh.info, "refined_quads": int(keep.sum()), "bin_fitted_quads": int(in_bins.sum())}
-    return QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel, info)
+    coloured = QuadMesh(mesh.camera, mesh.rects, planes, mesh.quad_of_pixel,
+                        {**mesh.info, "refined_quads": int(keep.sum())})
+    return fit_mesh_in_code_bins(coloured, view.depth, ~keep)
 
 
 def _fit_to_colour(mesh: QuadMesh, view: View, other: View, px: "_Pixels") -> tuple[np.ndarray, np.ndarray]:
