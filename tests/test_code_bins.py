@@ -302,7 +302,7 @@ def test_bad_input_is_refused_by_name(change, error, match, fit):
         fit(*args)
 
 
-@pytest.mark.parametrize("tolerance, error", [(-0.01, ValueError), (np.nan, ValueError), (np.inf, ValueError),
+@pytest.mark.parametrize("tolerance, error", [(-0.01, ValueError), (np.nan, ValueError), (-np.inf, ValueError),
                                               ("0.1", TypeError), (True, TypeError)])
 def test_a_bad_split_tolerance_is_refused_by_name(tolerance, error):
     depth = _codes(20.3 + 0.06 * _uv()[0])
@@ -360,3 +360,49 @@ def test_a_plane_in_codes_is_not_split_and_without_a_tolerance_nothing_is():
     got = fit_mesh_in_code_bins(bare, cap)
     assert len(got) == len(bare) and got.info["bin_split_quads"] == 0
     assert np.array_equal(got.inv_depth_planes, fit_planes_in_code_bins(bare, cap)[0])
+
+
+def test_the_split_tolerance_given_or_recorded():
+    """The sphere's cap of the tests above: the tolerance the mesh records (0.25 code, times
+    :data:`SPLIT_SHARE`) and the same value given give the same mesh; a looser one splits the
+    quads into fewer parts, ``np.inf`` none."""
+    u, v = _uv()
+    depth = _codes(26.0 - 0.01 * ((u - 40) ** 2 + (v - 32) ** 2))
+    mesh = _with_tolerance(_grid_mesh(depth, size=16), 0.25)
+    recorded = fit_mesh_in_code_bins(mesh, depth)
+    given = fit_mesh_in_code_bins(mesh, depth, tolerance=code_bins.SPLIT_SHARE * 0.25 / BF)
+    assert np.array_equal(recorded.rects, given.rects) and np.array_equal(recorded.inv_depth_planes,
+                                                                           given.inv_depth_planes)
+    looser = fit_mesh_in_code_bins(mesh, depth, tolerance=0.3 / BF)
+    assert 0 < looser.info["bin_split_quads"] <= recorded.info["bin_split_quads"] and len(looser) < len(recorded)
+    none = fit_mesh_in_code_bins(mesh, depth, tolerance=np.inf)
+    assert len(none) == len(mesh) and none.info["bin_split_quads"] == 0
+    assert np.array_equal(none.inv_depth_planes, fit_planes_in_code_bins(mesh, depth)[0])
+
+
+def test_codes_of_no_smooth_surface_split_only_where_a_half_fits(monkeypatch):
+    """Noisy codes of a wavy surface (4 x 4 quads, a tolerance of 0.05 code): the quads counted as
+    fitted are those :func:`fit_planes_in_code_bins` fits, and a quad is split only where a half
+    found a surface of its own (never into parts that all keep the quad's plane); the parts tile
+    the quads, and a part's plane does not depend on which other quads are fitted (windows
+    fitted on a random share of 64 pixels, drawn per quad of the mesh)."""
+    monkeypatch.setattr(code_bins, "MAX_WINDOW_PIXELS", 64)
+    rng = np.random.default_rng(3)
+    u, v = _uv()
+    depth = _codes(30 + 1.2 * np.sin(u / 3.0) * np.cos(v / 2.5) + rng.normal(0, 0.4, (H, W)))
+    mesh = _grid_mesh(depth, size=4)
+    planes, fitted = fit_planes_in_code_bins(mesh, depth)
+    got = fit_mesh_in_code_bins(mesh, depth, tolerance=0.05 / BF)
+    assert got.info["bin_fitted_quads"] == fitted.sum() and got.info["bin_split_quads"] > 3
+    assert np.array_equal(got.quad_of_pixel >= 0, mesh.quad_of_pixel >= 0) and got.areas.sum() == mesh.areas.sum()
+    for k in np.flatnonzero(fitted):
+        x0, y0, x1, y1 = mesh.rects[k]
+        parts = np.unique(got.quad_of_pixel[y0:y1, x0:x1])
+        assert len(parts) == 1 or not all(np.array_equal(got.inv_depth_planes[i], planes[k]) for i in parts)
+    alone = np.zeros(len(mesh.rects), bool)
+    alone[np.flatnonzero(fitted)[:5]] = True
+    some = fit_mesh_in_code_bins(mesh, depth, alone, tolerance=0.05 / BF)
+    inside = np.isin(mesh.quad_of_pixel, np.flatnonzero(alone))
+    from ibr.mesh.quad_mesh import mesh_depth
+    assert np.array_equal(mesh_depth(some)[inside], mesh_depth(got)[inside])
+

@@ -183,11 +183,12 @@ def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
 @pytest.mark.parametrize("scene", ["room", "clutter"])
 def test_8bit_disparity_renders_close_to_its_exact_depth(scene):
     """Issue 11's targets on the bundled pairs re-encoded as 8-bit integer disparity (their own
-    baseline), t = .25/.5/.75, covered pixels: within 0.3 dB of the exact depth's render
-    (measured room -0.17 dB: -0.40 with the code planes, -0.25 with only the colour fit, -0.22
-    with the bins unsplit; clutter -0.17: -0.71, -0.56, -0.297) with at most 1.5x the exact
-    depth's quads in the meshes rendered (room 1.42x / 1.09x, clutter 1.00x / 1.08x). At a
-    source's own pose the source comes back exactly."""
+    baseline), t = .25/.5/.75, covered pixels: within 0.3 dB of the exact depth's render, asserted
+    within 0.2 so that the quads' split is needed (measured room -0.17 dB: -0.40 with the code
+    planes, -0.25 with only the colour fit, -0.22 with the bins unsplit; clutter -0.17: -0.71,
+    -0.56, -0.297) with at most 1.5x the exact depth's quads in the meshes rendered (room 1.42x /
+    1.09x, clutter 1.00x / 1.08x), some of them split. At a source's own pose the source comes
+    back exactly."""
     a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
     truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
     bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx
@@ -201,9 +202,10 @@ def test_8bit_disparity_renders_close_to_its_exact_depth(scene):
 
     exact = psnr(interpolate(a, b, cams, fill="none"))
     quantized = psnr(interpolate(*codes, cams, fill="none", mesh_options={"quantization": q}))
-    assert quantized > exact - 0.3
-    quads = [len(m) for m in interpolation_meshes(*codes, cams, mesh_options={"quantization": q})]
-    assert all(n <= 1.5 * len(m) for n, m in zip(quads, interpolation_meshes(a, b, cams)))
+    assert quantized > exact - 0.2
+    meshes = interpolation_meshes(*codes, cams, mesh_options={"quantization": q})
+    assert all(len(m) <= 1.5 * len(e) for m, e in zip(meshes, interpolation_meshes(a, b, cams)))
+    assert all(m.info["bin_split_quads"] > 0 for m in meshes)
     own = interpolate(*codes, [0.0, 1.0], fill="none", mesh_options={"quantization": q})
     for r, v in zip(own, codes):
         assert np.array_equal(r.color[~r.holes], v.color[~r.holes])

@@ -208,17 +208,18 @@ def _plane_of_surface(coef, q, step, x0, y0, x1, y1, uc, vc, scale, accept_codes
 
 
 @njit(cache=True)
-def fit_in_code_bins(q, step, rects, quads, grow, span, iterations, reject_after, reject_codes,
+def fit_in_code_bins(q, step, rects, seeds, grow, span, iterations, reject_after, reject_codes,
                      accept_codes, ridge, max_pixels):
-    """Planes ``q = a u + b v + c`` (uncentred pixel coordinates) for the ``quads`` (indices into
-    ``rects``), NaN rows where no plane was accepted, and for each the largest distance between
-    its plane and its surface at its pixels with depth (inverse depth; NaN where none). See
+    """Planes ``q = a u + b v + c`` (uncentred pixel coordinates) for the ``rects``, NaN rows where
+    no plane was accepted, and for each the largest distance between its plane and its surface at
+    its pixels with depth (inverse depth; NaN where none). Each rect's random share is drawn from
+    its own ``seeds`` entry, so its plane does not depend on which other rects are fitted. See
     :func:`ibr.mesh.code_bins.fit_planes_in_code_bins`."""
-    out = np.full((len(quads), 3), np.nan)
-    gaps = np.full(len(quads), np.nan)
-    for n in range(len(quads)):
-        np.random.seed(quads[n])  # a quad's plane does not depend on which others are fitted
-        x0, y0, x1, y1 = rects[quads[n], 0], rects[quads[n], 1], rects[quads[n], 2], rects[quads[n], 3]
+    out = np.full((len(rects), 3), np.nan)
+    gaps = np.full(len(rects), np.nan)
+    for n in range(len(rects)):
+        np.random.seed(seeds[n])
+        x0, y0, x1, y1 = rects[n, 0], rects[n, 1], rects[n, 2], rects[n, 3]
         wx0, wy0, reach = _region(q, step, x0, y0, x1, y1, grow, span)
         uc, vc = 0.5 * (x0 + x1 - 1), 0.5 * (y0 + y1 - 1)
         scale = 0.5 * max(reach.shape[0], reach.shape[1])  # coordinates of order one: a well-conditioned system

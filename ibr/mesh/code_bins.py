@@ -92,7 +92,7 @@ def fit_planes_in_code_bins(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarr
     fitted : (Q,) bool
         The quads whose plane was replaced.
     """
-    planes, fitted, _ = _fit(mesh, depth, quads)
+    planes, fitted, _ = _fit_quads(mesh, _Codes(mesh, depth), quads)
     return planes, fitted
 
 
@@ -103,8 +103,9 @@ def fit_mesh_in_code_bins(mesh: QuadMesh, depth, quads=None, *, tolerance=None) 
     Each chosen quad is fitted as by :func:`fit_planes_in_code_bins`; an accepted quad whose plane
     departs from its surface by more than ``tolerance`` at one of its pixels is halved across its
     longer side and each half fitted again the same way (its own surface, from the pixels around
-    it), until every part follows its surface or is one pixel. A part whose fit is not accepted
-    keeps the plane of the quad it came from.
+    it), until every part follows its surface or is one pixel. A half whose fit is not accepted
+    keeps the plane of the quad it came from; a quad neither of whose halves is accepted stays
+    whole.
 
     Parameters
     ----------
@@ -112,51 +113,67 @@ def fit_mesh_in_code_bins(mesh: QuadMesh, depth, quads=None, *, tolerance=None) 
         As for :func:`fit_planes_in_code_bins`.
     tolerance : float, optional
         Largest distance in inverse depth (1 / scene units) between a part's plane and its
-        surface; default :data:`SPLIT_SHARE` times the mesh's tolerance without the codes'
-        allowance (``mesh.info["tolerance_inv_depth"] - mesh.info["quantization_allowance_inv_depth"]``;
-        no split when the mesh has no such tolerance).
+        surface, >= 0 (``np.inf``: no split); default :data:`SPLIT_SHARE` times the mesh's
+        tolerance without the codes' allowance (``mesh.info["tolerance_inv_depth"] -
+        mesh.info["quantization_allowance_inv_depth"]``; no split when the mesh records no
+        tolerance, as a hand-built one).
 
     Returns
     -------
     QuadMesh
-        Same camera; the quads not split first (in their order), then the parts; ``info`` adds
-        ``"bin_fitted_quads"`` (quads of ``mesh`` whose plane, or a part's, came from the bins) and
-        ``"bin_split_quads"`` (quads of ``mesh`` split).
+        Same camera; the quads not split first (in their order), then the parts and the quads
+        whose halves were refused; ``quad_of_pixel`` made from the rects; ``info`` adds
+        ``"bin_fitted_quads"`` (quads of ``mesh`` whose plane came from the bins) and
+        ``"bin_split_quads"`` (quads of ``mesh`` split into parts).
     """
     from ._segment_kernels import label_rects
 
-    _check_mesh(mesh)
+    codes = _Codes(mesh, depth)
     tol = _split_tolerance(mesh, tolerance)
-    planes, fitted, gaps = _fit(mesh, depth, quads)
+    planes, fitted, gaps = _fit_quads(mesh, codes, quads)
     rects, origin = np.asarray(mesh.rects, np.int64), np.arange(len(mesh.rects))
-    done = []
-    while True:
-        halve = fitted & (gaps > tol) & ((rects[:, 2] - rects[:, 0]) * (rects[:, 3] - rects[:, 1]) > 1)
-        if not halve.any():
-            break
-        done.append((rects[~halve], planes[~halve], origin[~halve], fitted[~halve]))
-        rects, origin = _halves(rects[halve]), np.tile(origin[halve], 2)
-        inherited = np.tile(planes[halve], (2, 1))
-        parts = QuadMesh(mesh.camera, rects, inherited, label_rects(rects, *mesh.shape), mesh.info)
-        planes, fitted, gaps = _fit(parts, depth)
-        planes = np.where(fitted[:, None], planes, inherited)
-    done.append((rects, planes, origin, fitted))
-    rects, planes, origin, fitted = (np.concatenate(x) for x in zip(*done))
-    info = {**mesh.info, "bin_fitted_quads": len(np.unique(origin[fitted])),
+    halve = fitted & (gaps > tol) & (_areas(rects) > 1)
+    done = [(rects[~halve], planes[~halve], origin[~halve])]
+    rects, planes, origin = rects[halve], planes[halve], origin[halve]
+    while len(rects):
+        n = len(rects)
+        halves, half_origin = _halves(rects), np.tile(origin, 2)
+        got, gap = codes.fit(halves, half_origin)  # seeded by the quad of the mesh they came from
+        ok = np.isfinite(got).all(1)
+        whole = ~(ok[:n] | ok[n:])  # neither half follows a surface of its own: the quad stays whole
+        done.append((rects[whole], planes[whole], origin[whole]))
+        kept = np.tile(~whole, 2)
+        halves, half_origin, got, gap, ok = halves[kept], half_origin[kept], got[kept], gap[kept], ok[kept]
+        half_planes = np.where(ok[:, None], got, np.tile(planes[~whole], (2, 1)))
+        again = ok & (gap > tol) & (_areas(halves) > 1)
+        done.append((halves[~again], half_planes[~again], half_origin[~again]))
+        rects, planes, origin = halves[again], half_planes[again], half_origin[again]
+    rects, planes, origin = (np.concatenate(x) for x in zip(*done))
+    info = {**mesh.info, "bin_fitted_quads": int(fitted.sum()),
             "bin_split_quads": int(np.count_nonzero(np.bincount(origin, minlength=len(mesh.rects)) > 1))}
     return QuadMesh(mesh.camera, rects, planes, label_rects(rects, *mesh.shape), info)
 
 
 def _split_tolerance(mesh: QuadMesh, tolerance) -> float:
+    """``tolerance`` checked, or the default from the mesh's record (``inf`` without one)."""
     if tolerance is not None:
-        tol = check_finite_scalar("tolerance", tolerance)
-        if tol < 0:
+        tol = float(np.inf) if tolerance is np.inf else check_finite_scalar("tolerance", tolerance)
+        if not tol >= 0:
             raise ValueError(f"tolerance: expected a distance in inverse depth >= 0, got {tolerance!r}")
         return tol
     own = mesh.info.get("tolerance_inv_depth")
     if own is None:
-        return np.inf
-    return SPLIT_SHARE * (own - (mesh.info.get("quantization_allowance_inv_depth") or 0.0))
+        return float(np.inf)
+    allowance = mesh.info.get("quantization_allowance_inv_depth") or 0.0
+    try:
+        return SPLIT_SHARE * (float(own) - float(allowance))
+    except (TypeError, ValueError):
+        raise TypeError(f"mesh: info['tolerance_inv_depth'] and info['quantization_allowance_inv_depth'] "
+                        f"should be numbers, got {own!r} and {allowance!r}") from None
+
+
+def _areas(rects) -> np.ndarray:
+    return (rects[:, 2] - rects[:, 0]) * (rects[:, 3] - rects[:, 1])
 
 
 def _halves(rects) -> np.ndarray:
@@ -169,36 +186,43 @@ def _halves(rects) -> np.ndarray:
     return np.concatenate([first, second])
 
 
-def _check_mesh(mesh) -> DepthQuantization:
-    """The mesh's quantization, or an error naming ``mesh``."""
-    from ._segment_kernels import check_rects_inside
+class _Codes:
+    """A mesh's stored depth as inverse depth ``q`` and each pixel's code size ``step`` (inverse
+    depth), checked once; :meth:`fit` runs the kernel on any rects of that image."""
 
-    if not isinstance(mesh, QuadMesh):
-        raise TypeError(f"mesh: expected an ibr QuadMesh, got {type(mesh).__name__}")
-    quant = mesh.info.get("quantization")
-    if not isinstance(quant, DepthQuantization):
-        raise ValueError("mesh: built without a quantization (build_mesh(..., quantization=...)); "
-                         "its depth has no code bins")
-    check_rects_inside(mesh.rects, *mesh.shape)
-    return quant
+    def __init__(self, mesh, depth):
+        from ._segment_kernels import check_rects_inside
+
+        if not isinstance(mesh, QuadMesh):
+            raise TypeError(f"mesh: expected an ibr QuadMesh, got {type(mesh).__name__}")
+        quant = mesh.info.get("quantization")
+        if not isinstance(quant, DepthQuantization):
+            raise ValueError("mesh: built without a quantization (build_mesh(..., quantization=...)); "
+                             "its depth has no code bins")
+        check_rects_inside(mesh.rects, *mesh.shape)
+        q = _inv_depth(check_array("depth", depth, shape=mesh.shape, dtype_kind="fiu"))
+        step = np.where(np.isfinite(q), quant.inv_step(np.nan_to_num(q)), 1.0)
+        if not (step > 0).all():
+            raise ValueError(f"mesh: its quantization ({quant.describe()}) has no step at some depth of this view")
+        self.q, self.step = q, np.ascontiguousarray(step)
+
+    def fit(self, rects, seeds) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 3) planes of the rects in the bins (NaN rows where refused) and (N,) the largest
+        distance of each from its surface."""
+        from ._code_bins_kernels import fit_in_code_bins
+
+        return fit_in_code_bins(self.q, self.step, np.ascontiguousarray(rects, np.int64),
+                                np.asarray(seeds, np.int64), GROW, SURFACE_STEP_CODES, ITERATIONS, REJECT_AFTER,
+                                REJECT_CODES, ACCEPT_CODES, RIDGE, MAX_WINDOW_PIXELS)
 
 
-def _fit(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _fit_quads(mesh: QuadMesh, codes: _Codes, quads=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`fit_planes_in_code_bins`'s planes and fitted quads, and each fitted quad's largest
     distance between plane and surface (NaN for the others)."""
-    from ._code_bins_kernels import fit_in_code_bins
-
-    quant = _check_mesh(mesh)
-    q = _inv_depth(check_array("depth", depth, shape=mesh.shape, dtype_kind="fiu"))
     n = len(mesh.rects)
     chosen = np.ones(n, bool) if quads is None else check_array("quads", quads, shape=(n,), dtype_kind="b")
-    step = np.where(np.isfinite(q), quant.inv_step(np.nan_to_num(q)), 1.0)
-    if not (step > 0).all():
-        raise ValueError(f"mesh: its quantization ({quant.describe()}) has no step at some depth of this view")
     idx = np.flatnonzero(chosen)
-    got, gap = fit_in_code_bins(q, np.ascontiguousarray(step), np.ascontiguousarray(mesh.rects, np.int64),
-                                idx.astype(np.int64), GROW, SURFACE_STEP_CODES, ITERATIONS, REJECT_AFTER,
-                                REJECT_CODES, ACCEPT_CODES, RIDGE, MAX_WINDOW_PIXELS)
+    got, gap = codes.fit(np.asarray(mesh.rects)[idx], idx)
     ok = np.isfinite(got).all(1)
     planes = np.array(mesh.inv_depth_planes, np.float64, copy=True)
     planes[idx[ok]] = got[ok]

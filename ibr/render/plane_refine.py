@@ -111,7 +111,8 @@ def refine_planes(mesh: QuadMesh, view: View, other: View) -> QuadMesh:
         of the codes around it where that works, and split where one plane does not follow the
         surface they allow (:func:`ibr.mesh.code_bins.fit_mesh_in_code_bins`),
         ``info["bin_fitted_quads"]`` and ``info["bin_split_quads"]`` of them (all 0 without a
-        quantization, and the mesh then as it was).
+        quantization, and the mesh then as it was; with one, ``quad_of_pixel`` is made anew from
+        the rects).
     """
     _check_inputs(mesh, view, other)
     quant = mesh.info.get("quantization")

@@ -877,8 +877,9 @@ def interpolation_meshes(view_a: View, view_b: View, t, *, mesh_options: dict | 
     (QuadMesh, QuadMesh)
         Where a source's depth is coarsely quantized (:mod:`ibr.render.plane_refine`), its mesh
         has its large quads fitted to the other source's colour and the others placed inside the
-        bins of their codes (:mod:`ibr.mesh.code_bins`); ``mesh.info["refined_quads"]`` and
-        ``mesh.info["bin_fitted_quads"]`` count the planes that changed.
+        bins of their codes, split where one plane does not follow them (:mod:`ibr.mesh.code_bins`);
+        ``mesh.info["refined_quads"]``, ``mesh.info["bin_fitted_quads"]`` and
+        ``mesh.info["bin_split_quads"]`` count the quads of the segmentation so treated.
     """
     check_choice("lod", lod, LODS)
     _check_pair(view_a, view_b)
