@@ -375,7 +375,7 @@ def test_the_split_tolerance_given_or_recorded():
                                                                            given.inv_depth_planes)
     looser = fit_mesh_in_code_bins(mesh, depth, tolerance=0.3 / BF)
     assert 0 < looser.info["bin_split_quads"] <= recorded.info["bin_split_quads"] and len(looser) < len(recorded)
-    none = fit_mesh_in_code_bins(mesh, depth, tolerance=np.inf)
+    none = fit_mesh_in_code_bins(mesh, depth, tolerance=float("inf"))
     assert len(none) == len(mesh) and none.info["bin_split_quads"] == 0
     assert np.array_equal(none.inv_depth_planes, fit_planes_in_code_bins(mesh, depth)[0])
 

@@ -133,8 +133,18 @@ def fit_mesh_in_code_bins(mesh: QuadMesh, depth, quads=None, *, tolerance=None) 
     planes, fitted, gaps = _fit_quads(mesh, codes, quads)
     rects, origin = np.asarray(mesh.rects, np.int64), np.arange(len(mesh.rects))
     halve = fitted & (gaps > tol) & (_areas(rects) > 1)
-    done = [(rects[~halve], planes[~halve], origin[~halve])]
-    rects, planes, origin = rects[halve], planes[halve], origin[halve]
+    parts = _split(codes, rects[halve], planes[halve], origin[halve], tol)
+    rects, planes, origin = (np.concatenate(x) for x in zip((rects[~halve], planes[~halve], origin[~halve]), parts))
+    info = {**mesh.info, "bin_fitted_quads": int(fitted.sum()),
+            "bin_split_quads": int(np.count_nonzero(np.bincount(origin, minlength=len(mesh.rects)) > 1))}
+    return QuadMesh(mesh.camera, rects, planes, label_rects(rects, *mesh.shape), info)
+
+
+def _split(codes: "_Codes", rects, planes, origin, tol) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rects (their planes, and the index of the mesh's quad each came from) halved and
+    fitted again, round after round, until every part follows its surface within ``tol``, is one
+    pixel, or has no surface of its own (:func:`fit_mesh_in_code_bins`)."""
+    done = []
     while len(rects):
         n = len(rects)
         halves, half_origin = _halves(rects), np.tile(origin, 2)
@@ -148,17 +158,18 @@ def fit_mesh_in_code_bins(mesh: QuadMesh, depth, quads=None, *, tolerance=None) 
         again = ok & (gap > tol) & (_areas(halves) > 1)
         done.append((halves[~again], half_planes[~again], half_origin[~again]))
         rects, planes, origin = halves[again], half_planes[again], half_origin[again]
-    rects, planes, origin = (np.concatenate(x) for x in zip(*done))
-    info = {**mesh.info, "bin_fitted_quads": int(fitted.sum()),
-            "bin_split_quads": int(np.count_nonzero(np.bincount(origin, minlength=len(mesh.rects)) > 1))}
-    return QuadMesh(mesh.camera, rects, planes, label_rects(rects, *mesh.shape), info)
+    if not done:
+        return rects, planes, origin
+    return tuple(np.concatenate(x) for x in zip(*done))
 
 
 def _split_tolerance(mesh: QuadMesh, tolerance) -> float:
     """``tolerance`` checked, or the default from the mesh's record (``inf`` without one)."""
     if tolerance is not None:
-        tol = float(np.inf) if tolerance is np.inf else check_finite_scalar("tolerance", tolerance)
-        if not tol >= 0:
+        if isinstance(tolerance, (float, np.floating)) and tolerance == np.inf:
+            return float(np.inf)
+        tol = check_finite_scalar("tolerance", tolerance)
+        if tol < 0:
             raise ValueError(f"tolerance: expected a distance in inverse depth >= 0, got {tolerance!r}")
         return tol
     own = mesh.info.get("tolerance_inv_depth")
