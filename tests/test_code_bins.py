@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ibr.base.camera import Camera
 from ibr.base.depth import DepthQuantization
@@ -406,3 +408,32 @@ def test_codes_of_no_smooth_surface_split_only_where_a_half_fits(monkeypatch):
     from ibr.mesh.quad_mesh import mesh_depth
     assert np.array_equal(mesh_depth(some)[inside], mesh_depth(got)[inside])
 
+
+
+@settings(max_examples=40, deadline=None)
+@given(curvature=st.floats(0.0, 0.03), tilt=st.floats(-0.2, 0.2), size=st.sampled_from([3, 5, 8, 13]),
+       tolerance_codes=st.floats(0.0, 1.0), holes=st.booleans(), seed=st.integers(0, 2**16))
+def test_the_parts_always_tile_their_quads(curvature, tilt, size, tolerance_codes, holes, seed):
+    """Any surface, grid of quads and tolerance (down to 0: parts of one pixel): every part lies
+    inside one quad of the mesh, the parts cover exactly the quads' pixels, no plane is NaN, a
+    quad is split only if it was fitted, and a quad that was not split keeps the plane
+    :func:`fit_planes_in_code_bins` gives it."""
+    rng = np.random.default_rng(seed)
+    u, v = _uv()
+    disparity = 24.0 + tilt * u - curvature * ((u - 40) ** 2 + (v - 32) ** 2) + rng.normal(0, 0.2, (H, W))
+    depth = _codes(disparity)
+    if holes:
+        depth[rng.random((H, W)) < 0.05] = np.nan
+    mesh = _grid_mesh(np.where(np.isfinite(depth), depth, 1.0).astype(np.float32), size=size)
+    planes, fitted = fit_planes_in_code_bins(mesh, depth)
+    got = fit_mesh_in_code_bins(mesh, depth, tolerance=tolerance_codes / BF)
+    assert np.isfinite(got.inv_depth_planes).all()
+    assert np.array_equal(got.quad_of_pixel >= 0, mesh.quad_of_pixel >= 0) and got.areas.sum() == mesh.areas.sum()
+    x0, y0, x1, y1 = (np.asarray(got.rects)[:, i] for i in range(4))
+    parent = mesh.quad_of_pixel[y0, x0]
+    assert np.array_equal(mesh.quad_of_pixel[y1 - 1, x1 - 1], parent)  # a part never straddles two quads
+    split = np.bincount(parent, minlength=len(mesh.rects)) > 1
+    assert got.info["bin_split_quads"] == split.sum() and not (split & ~fitted).any()
+    whole = np.flatnonzero(~split)
+    part_of = {int(p): i for i, p in enumerate(parent) if not split[p]}
+    assert all(np.array_equal(got.inv_depth_planes[part_of[k]], planes[k]) for k in whole)
