@@ -140,10 +140,11 @@ def test_a_partner_that_is_gone_leaves_nothing_behind(plane_pair):
         vb = View(cb.color, cb.depth, cb.camera, "b")
         set_quantization(vb, q)
         interpolate(va, vb, 0.5, fill="none")
+        interpolate(va, vb, 0.5, fill="none", supersample=3)  # upsampled from the fitted mesh's depth
 
     def dead_keys():
         src = _source(va)
-        return sum(_holds_dead_ref(k) for cache in (src.meshes, src._trust) for k in cache)
+        return sum(_holds_dead_ref(k) for cache in (src.meshes, src._trust, src._upsampled) for k in cache)
 
     pair_with_a_new_partner()
     gc.collect()
@@ -244,6 +245,28 @@ def _write_8bit_disparity_pair(folder, views, bf: float) -> list:
         (folder / f"{n}.json").write_text(json.dumps(doc))
         paths.append(folder / f"{n}.json")
     return paths
+
+
+@pytest.mark.parametrize("scene, within", [("room", 0.2), ("clutter", 0.6)])
+def test_supersampled_8bit_disparity_is_upsampled_from_the_fitted_planes(scene, within):
+    """With ``supersample=3`` the sources are upsampled and meshed anew, so a source in coarse
+    codes is upsampled from the depth of its fitted mesh, not from its codes: 8-bit disparity
+    against the exact depth's ``supersample=3`` render (t = .25/.5/.75, covered pixels), measured
+    room -0.09 dB and clutter -0.42 (from the codes: -0.32 / -0.92)."""
+    a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
+    truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
+    bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx
+    codes = _in_disparity_codes((a, b), bf)
+    q = DepthQuantization.disparity(baseline=bf / a.camera.fx, focal_px=a.camera.fx)
+    cams = [g.camera for g in truths]
+
+    def psnr(frames):
+        return np.mean([10 * np.log10(255.0**2 / np.mean((r.color.astype(float) - g.color)[~r.holes] ** 2))
+                        for r, g in zip(frames, truths)])
+
+    exact = psnr(interpolate(a, b, cams, fill="none", supersample=3))
+    quantized = psnr(interpolate(*codes, cams, fill="none", supersample=3, mesh_options={"quantization": q}))
+    assert quantized > exact - within
 
 
 def test_the_meshes_interpolate_uses_are_built_up_front_and_say_what_was_fitted(plane_pair, tmp_path, capsys):
