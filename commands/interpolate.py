@@ -401,11 +401,11 @@ def run(args) -> int:
         with_depth = view_a.depth is not None and view_b.depth is not None
         compiling = note_first_run(*modules, warm=warm, announce=with_depth)
 
+        if args.method == "mesh" and with_depth and any(coarse_sources(view_a, view_b)):
+            # depth in coarse codes: the codes' bins kernel compiles (here, or with the first supersampled frame), once
+            compiling = note_first_run(*modules, *CODE_BIN_KERNELS, warm=warm, announce=not compiling) or compiling
         if args.method == "mesh" and args.supersample == 1:  # supersampled: meshes of the upsampled
-            if with_depth and any(coarse_sources(view_a, view_b)):  # sources, built with the first frame
-                # depth in coarse codes: the codes' bins kernel compiles here, once (about 4 s)
-                compiling = note_first_run(*modules, *CODE_BIN_KERNELS, warm=warm, announce=not compiling) or compiling
-            t0 = time.perf_counter()
+            t0 = time.perf_counter()  # sources, built with the first frame
             mesh_a, mesh_b = interpolation_meshes(view_a, view_b, ts)
             n_fitted = [m.info.get("refined_quads", 0) for m in (mesh_a, mesh_b)]
             n_binned = [m.info.get("bin_fitted_quads", 0) for m in (mesh_a, mesh_b)]

@@ -147,6 +147,7 @@ def test_a_partner_that_is_gone_leaves_nothing_behind(plane_pair):
         return sum(_holds_dead_ref(k) for cache in (src.meshes, src._trust, src._upsampled) for k in cache)
 
     pair_with_a_new_partner()
+    assert any(isinstance(key[1], tuple) for key in _source(va)._upsampled)  # upsampled from the fitted mesh
     gc.collect()
     first = dead_keys()
     assert first > 0  # the first partner's mesh, trust, sharp colour ...
@@ -252,7 +253,7 @@ def test_supersampled_8bit_disparity_is_upsampled_from_the_fitted_planes(scene, 
     """With ``supersample=3`` the sources are upsampled and meshed anew, so a source in coarse
     codes is upsampled from the depth of its fitted mesh, not from its codes: 8-bit disparity
     against the exact depth's ``supersample=3`` render (t = .25/.5/.75, covered pixels), measured
-    room -0.09 dB and clutter -0.42 (from the codes: -0.32 / -0.92)."""
+    room -0.09 dB and clutter -0.41 (from the codes: -0.32 / -0.92)."""
     a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
     truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
     bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx
@@ -267,6 +268,26 @@ def test_supersampled_8bit_disparity_is_upsampled_from_the_fitted_planes(scene, 
     exact = psnr(interpolate(a, b, cams, fill="none", supersample=3))
     quantized = psnr(interpolate(*codes, cams, fill="none", supersample=3, mesh_options={"quantization": q}))
     assert quantized > exact - within
+
+
+def test_a_quantization_from_the_file_from_the_options_or_set_later_gives_the_same_frames(plane_pair, tmp_path):
+    """The pair's 8-bit view files (their quantization recorded by load_view), the same codes in
+    memory with the quantization in ``mesh_options``, and in memory with it set on the views after
+    a first call without it: the same frames at 1x and supersampled (the recorded quantization is
+    part of the meshes' cache key, so nothing built before it was set is reused)."""
+    a, b, _, q, bf = plane_pair
+    files = [load_view(p) for p in _write_8bit_disparity_pair(tmp_path, (a, b), bf)]
+    memory = _in_disparity_codes((a, b), bf)
+    later = _in_disparity_codes((a, b), bf)
+    interpolate(*later, 0.5, fill="none", supersample=3)
+    interpolate(*later, 0.5, fill="none")
+    for v in later:
+        set_quantization(v, q)
+    for k in (1, 3):
+        want = interpolate(*files, 0.5, fill="none", supersample=k).color
+        assert np.array_equal(interpolate(*memory, 0.5, fill="none", supersample=k,
+                                          mesh_options={"quantization": q}).color, want)
+        assert np.array_equal(interpolate(*later, 0.5, fill="none", supersample=k).color, want)
 
 
 def test_the_meshes_interpolate_uses_are_built_up_front_and_say_what_was_fitted(plane_pair, tmp_path, capsys):

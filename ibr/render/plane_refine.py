@@ -17,11 +17,12 @@ planes see) and explains the code of every pixel it was fitted on within :data:`
 otherwise the quad keeps its plane (weak texture along the epipolar lines, occlusions, small
 quads), and it and every quad not fitted to the colour get the plane the bins of the codes
 around them allow (:mod:`ibr.mesh.code_bins`). ``interpolate`` fits its two sources to each
-other unless it supersamples.
+other; when it supersamples, it upsamples a coarse source from the depth of its fitted mesh.
 
 Measured (``python benchmarks/bench_edges.py --quick``, section 3: 8-bit disparity against the
 exact depth, covered pixels, t = .25/.5/.75): room -0.40 -> -0.25 dB, clutter -0.71 -> -0.56;
-with the bins for the other quads (sixteenth session) room -0.22, clutter -0.30; docs/edges.md
+with the bins for the other quads (sixteenth session) room -0.22, clutter -0.30, split where a
+plane does not follow them (seventeenth) -0.17 / -0.17; docs/edges.md
 section 3 has the other scenes and what was tried.
 
 Conventions: pixel centres at integer (u, v); planes in inverse planar depth per source pixel;

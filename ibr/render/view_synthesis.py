@@ -156,7 +156,7 @@ class _Source:
 
     def upsampled(self, k: int, refined_key=None) -> View:
         """The source at k x k its resolution with sub-pixel silhouettes
-        (:func:`~ibr.render.upsample.upsample_view`), made once per factor; its meshes are
+        (:func:`~ibr.render.upsample.upsample_view`), made once per factor (and partner); its meshes are
         cached on it like any view's. With ``refined_key`` (the options of a mesh of this source
         refined against its partner, :func:`_with_partners`) it is upsampled from that mesh's
         depth instead of its stored codes (:func:`_upsampled_pair`)."""
@@ -375,7 +375,12 @@ def lod_baseline(view: View, cameras) -> float:
 
 def _lod_options(view: View, cameras, mesh_options: dict, lod: str) -> dict:
     """``mesh_options`` plus the move-derived baseline, unless the caller fixed the level of
-    detail (``threshold`` or ``baseline``) or asked for the old default (``lod="depth"``)."""
+    detail (``threshold`` or ``baseline``) or asked for the old default (``lod="depth"``), and
+    the quantization recorded on the view unless the options give one (so that it is part of
+    the meshes' cache key: a quantization set on the view later builds new meshes)."""
+    recorded = quantization_of(view)
+    if mesh_options.get("quantization") is None and recorded is not None:
+        mesh_options = {**mesh_options, "quantization": recorded}
     if lod == "depth" or "threshold" in mesh_options or "baseline" in mesh_options:
         return mesh_options
     b = lod_baseline(view, cameras)
@@ -862,7 +867,8 @@ def _upsampled_pair(view_a, view_b, cams, mesh_options: dict, lod: str, method: 
     docs/edges.md section 3); its upsampled meshes still allow for the codes' quantization."""
     if method != "mesh":
         return _source(view_a).upsampled(k), _source(view_b).upsampled(k)
-    opts = _pair_mesh_options(view_a, view_b, cams, mesh_options, lod)
+    # the fitted meshes of the whole pair's span (one upsampled view per source and partner, whatever the frames)
+    opts = _pair_mesh_options(view_a, view_b, [view_a.camera, view_b.camera], mesh_options, lod)
     return tuple(_source(v).upsampled(k, _mesh_key(o) if _PARTNER in o else None)
                  for v, o in zip((view_a, view_b), opts))
 
