@@ -7,7 +7,8 @@ Edge band PSNR (bench_edges.edge_band, t = .25/.5/.75) of
    twice and four diagonal subsamples at +-1/3 px): what perfect geometry and colour give;
 2. ``interpolate(..., supersample=3)`` with the sources' upsampling replaced by perfect 3x
    sources: the scene's exact depth at 3x with the upsampled colour, then exact depth and colour
-   (3x3 supersampled at 3x): what this renderer gives from perfect sources.
+   (3x3 supersampled at 3x): what this renderer gives from perfect sources; and the same with
+   every pixel box-filtered (the renderer keeps the centre subsample off the edges).
 
 Usage (from the repository root): ``python benchmarks/exp_band_ceilings.py`` (about 2 minutes).
 docs/edges.md section 1 ("Ceilings of the band targets") has the figures (2026-11-26).
@@ -65,9 +66,34 @@ def perfect_sources(name, scene, truths):
         finally:
             upsample.upsample_view = original
         rows[label] = be.edge_scores(frames, truths)[0]
+    rows["the same, every pixel box-filtered"] = _every_pixel_boxed(scene, name, cams, truths)
     a, b, _ = be.load_pair(name)
     rows["supersample=3 (today)"] = be.edge_scores(interpolate(a, b, cams, fill="none", supersample=3), truths)[0]
     return rows
+
+
+def _every_pixel_boxed(scene, name, cams, truths):
+    """Exact 3x depth and colour as above, every pixel the mean of its 3 x 3 subsamples (not the
+    edge pixels only, :func:`ibr.render.supersample.downsample_rendering`): the truths' own box."""
+    import ibr.render.supersample as supersample
+
+    original, edges = upsample.upsample_view, supersample.edge_pixels
+
+    def exact(view, k):
+        up = original(view, k)
+        big = render(scene, view.camera.resized(view.camera.width * k, view.camera.height * k), supersample=3)
+        return dataclasses.replace(up, depth=big.depth,
+                                   color=np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype))
+
+    upsample.upsample_view = exact
+    supersample.edge_pixels = lambda depth_k, covered_k, k, tol: np.ones(
+        (depth_k.shape[0] // k, depth_k.shape[1] // k), bool)
+    try:
+        a, b, _ = be.load_pair(name)
+        frames = interpolate(a, b, cams, fill="none", supersample=3)
+    finally:
+        upsample.upsample_view, supersample.edge_pixels = original, edges
+    return be.edge_scores(frames, truths)[0]
 
 
 def main() -> int:
