@@ -182,6 +182,22 @@ def test_coarse_means_a_code_moves_a_point_by_a_quarter_pixel():
         is_coarse(0.5, 3.0, base, f)
 
 
+def _bundled_pair_in_8bit_disparity(scene):
+    """A bundled pair, it in 8-bit integer disparity codes of its own baseline, their
+    quantization, the truths' cameras (t = .25/.5/.75) and the mean PSNR of frames rendered into
+    them over their covered pixels."""
+    a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
+    truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
+    bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx
+    q = DepthQuantization.disparity(baseline=bf / a.camera.fx, focal_px=a.camera.fx)
+
+    def psnr(frames):
+        return np.mean([10 * np.log10(255.0**2 / np.mean((r.color.astype(float) - g.color)[~r.holes] ** 2))
+                        for r, g in zip(frames, truths)])
+
+    return a, b, _in_disparity_codes((a, b), bf), q, [g.camera for g in truths], psnr
+
+
 @pytest.mark.parametrize("scene", ["room", "clutter"])
 def test_8bit_disparity_renders_close_to_its_exact_depth(scene):
     """Issue 11's targets on the bundled pairs re-encoded as 8-bit integer disparity (their own
@@ -191,17 +207,7 @@ def test_8bit_disparity_renders_close_to_its_exact_depth(scene):
     -0.56, -0.297) with at most 1.5x the exact depth's quads in the meshes rendered (room 1.42x /
     1.09x, clutter 1.00x / 1.08x), some of them split. At a source's own pose the source comes
     back exactly."""
-    a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
-    truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
-    bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx
-    codes = _in_disparity_codes((a, b), bf)
-    q = DepthQuantization.disparity(baseline=bf / a.camera.fx, focal_px=a.camera.fx)
-    cams = [g.camera for g in truths]
-
-    def psnr(frames):
-        return np.mean([10 * np.log10(255.0**2 / np.mean((r.color.astype(float) - g.color)[~r.holes] ** 2))
-                        for r, g in zip(frames, truths)])
-
+    a, b, codes, q, cams, psnr = _bundled_pair_in_8bit_disparity(scene)
     exact = psnr(interpolate(a, b, cams, fill="none"))
     quantized = psnr(interpolate(*codes, cams, fill="none", mesh_options={"quantization": q}))
     assert quantized > exact - 0.2
@@ -254,17 +260,7 @@ def test_supersampled_8bit_disparity_is_upsampled_from_the_fitted_planes(scene, 
     codes is upsampled from the depth of its fitted mesh, not from its codes: 8-bit disparity
     against the exact depth's ``supersample=3`` render (t = .25/.5/.75, covered pixels), measured
     room -0.09 dB and clutter -0.41 (from the codes: -0.32 / -0.92)."""
-    a, b = load_view(DATA_DIR / f"{scene}_a.json"), load_view(DATA_DIR / f"{scene}_b.json")
-    truths = [load_view(DATA_DIR / f"{scene}_t{p:03d}.json") for p in (25, 50, 75)]
-    bf = float(np.linalg.norm(a.camera.position - b.camera.position)) * a.camera.fx
-    codes = _in_disparity_codes((a, b), bf)
-    q = DepthQuantization.disparity(baseline=bf / a.camera.fx, focal_px=a.camera.fx)
-    cams = [g.camera for g in truths]
-
-    def psnr(frames):
-        return np.mean([10 * np.log10(255.0**2 / np.mean((r.color.astype(float) - g.color)[~r.holes] ** 2))
-                        for r, g in zip(frames, truths)])
-
+    a, b, codes, q, cams, psnr = _bundled_pair_in_8bit_disparity(scene)
     exact = psnr(interpolate(a, b, cams, fill="none", supersample=3))
     quantized = psnr(interpolate(*codes, cams, fill="none", supersample=3, mesh_options={"quantization": q}))
     assert quantized > exact - within
