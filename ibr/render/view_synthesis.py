@@ -826,7 +826,7 @@ def iter_interpolate(
     cams, ts, _ = _targets(view_a, view_b, t)
     base = check_mesh_options(mesh_options)
     if k > 1:  # the sources at k x k their resolution, sub-pixel silhouettes (ibr.render.upsample)
-        view_a, view_b = _upsampled_pair(view_a, view_b, cams, base, lod, method, k)
+        view_a, view_b = _upsampled_pair(view_a, view_b, base, lod, method, k)
         opts = [_lod_options(v, cams, base, lod) for v in (view_a, view_b)] if method == "mesh" else [{}, {}]
     else:
         opts = _pair_mesh_options(view_a, view_b, cams, base, lod) if method == "mesh" else [{}, {}]
@@ -859,11 +859,11 @@ def _pair_mesh_options(view_a, view_b, cams, mesh_options: dict, lod: str) -> li
     return _with_partners([view_a, view_b], opts)
 
 
-def _upsampled_pair(view_a, view_b, cams, mesh_options: dict, lod: str, method: str, k: int) -> tuple:
+def _upsampled_pair(view_a, view_b, mesh_options: dict, lod: str, method: str, k: int) -> tuple:
     """The two sources at k x k their resolution (:meth:`_Source.upsampled`). A source in coarse
     codes (:func:`_with_partners`) is upsampled from the depth of its mesh refined against the
     other source (:mod:`ibr.render.plane_refine`) rather than from its codes (8-bit disparity,
-    ``supersample=3``, against the exact depth's: clutter -0.92 -> -0.42 dB, room -0.32 -> -0.09;
+    ``supersample=3``, against the exact depth's: clutter -0.92 -> -0.41 dB, room -0.32 -> -0.09;
     docs/edges.md section 3); its upsampled meshes still allow for the codes' quantization."""
     if method != "mesh":
         return _source(view_a).upsampled(k), _source(view_b).upsampled(k)
