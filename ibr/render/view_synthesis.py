@@ -863,7 +863,7 @@ def _upsampled_pair(view_a, view_b, mesh_options: dict, lod: str, method: str, k
     """The two sources at k x k their resolution (:meth:`_Source.upsampled`). A source in coarse
     codes (:func:`_with_partners`) is upsampled from the depth of its mesh refined against the
     other source (:mod:`ibr.render.plane_refine`) rather than from its codes (8-bit disparity,
-    ``supersample=3``, against the exact depth's: clutter -0.92 -> -0.41 dB, room -0.32 -> -0.09;
+    ``supersample=3``, against the exact depth's: clutter -0.94 -> -0.43 dB, room -0.32 -> -0.10;
     docs/edges.md section 3); its upsampled meshes still allow for the codes' quantization."""
     if method != "mesh":
         return _source(view_a).upsampled(k), _source(view_b).upsampled(k)
