@@ -47,6 +47,7 @@ import shutil
 import sys
 import time
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 
@@ -265,39 +266,21 @@ def in_disparity_codes(views, bf: float) -> list:
     return [View(v.color, (bf / np.rint(bf / v.depth)).astype(np.float32), v.camera, v.name) for v in views]
 
 
-@contextlib.contextmanager
 def code_planes():
     """Quads of quantized depth keep their least-squares planes on the codes (before the
     photo-consistent planes of :mod:`ibr.render.plane_refine`, fifteenth session)."""
-    saved = plane_refine.COARSE_PX
-    plane_refine.COARSE_PX = np.inf
-    try:
-        yield
-    finally:
-        plane_refine.COARSE_PX = saved
+    return mock.patch.object(plane_refine, "COARSE_PX", np.inf)
 
 
-@contextlib.contextmanager
 def colour_planes_only():
     """Quads of quantized depth fitted to the other view's colour only, the others kept on their
     codes (before :mod:`ibr.mesh.code_bins`, sixteenth session)."""
-    saved = plane_refine.fit_mesh_in_code_bins
-    plane_refine.fit_mesh_in_code_bins = lambda mesh, depth, quads=None: mesh
-    try:
-        yield
-    finally:
-        plane_refine.fit_mesh_in_code_bins = saved
+    return mock.patch.object(plane_refine, "fit_mesh_in_code_bins", lambda mesh, depth, quads=None: mesh)
 
 
-@contextlib.contextmanager
 def unsplit_bins():
     """Quads placed inside the codes' bins but never split (before the seventeenth session)."""
-    saved = code_bins.SPLIT_SHARE
-    code_bins.SPLIT_SHARE = np.inf
-    try:
-        yield
-    finally:
-        code_bins.SPLIT_SHARE = saved
+    return mock.patch.object(code_bins, "SPLIT_SHARE", np.inf)
 
 
 def section_quantized():
@@ -358,12 +341,8 @@ def quantized_supersampled(name, exact, codes, quantization, truths):
 
     p0, p = score(exact), score(codes, mesh_options={"quantization": quantization})
     fresh = [View(v.color, v.depth, v.camera, v.name) for v in codes]  # new views: nothing cached on them
-    saved = view_synthesis._with_mesh_depth
-    view_synthesis._with_mesh_depth = lambda view, mesh: view
-    try:
+    with mock.patch.object(view_synthesis, "_with_mesh_depth", lambda view, mesh: view):
         before = score(fresh, mesh_options={"quantization": quantization})
-    finally:
-        view_synthesis._with_mesh_depth = saved
     print(f"{name:<8} {'supersample 3: exact / 8-bit from fitted planes / from codes':<64} {p0:.2f} / {p:.2f} "
           f"({p - p0:+.2f}) / {before:.2f} ({before - p0:+.2f})")
 
