@@ -38,7 +38,7 @@ from ..base.depth import DepthQuantization, quantization_of
 from ..base.validate import check_finite_scalar, check_positive
 from ..base.view import View
 from ..mesh.code_bins import fit_mesh_in_code_bins
-from ..mesh.quad_mesh import QuadMesh
+from ..mesh.quad_mesh import QuadMesh, _inv_depth
 from .points import sample_points
 from .rasterize import src_from_tgt
 from .upsample import _unit_color
@@ -193,9 +193,8 @@ def _quads_to_fit(mesh: QuadMesh, depth, quant: DepthQuantization) -> np.ndarray
     spanning five codes or more to the colour moved them off the ground truth (0.065 -> 0.32 px
     rms)."""
     r, qop = mesh.rects, mesh.quad_of_pixel
-    with np.errstate(divide="ignore", invalid="ignore"):
-        q = 1.0 / np.asarray(depth, np.float64)
-    valid = (qop >= 0) & np.isfinite(q) & (q > 0)
+    q = _inv_depth(depth)  # NaN where no depth
+    valid = (qop >= 0) & np.isfinite(q)
     code = q[valid] / quant.inv_step(q[valid])  # the code index (disparity, or z / step)
     hi, lo = np.full(len(r), -np.inf), np.full(len(r), np.inf)
     np.maximum.at(hi, qop[valid], code)
@@ -233,11 +232,9 @@ class _PlaneWarp:
         rotation, translation = src_from_tgt(other, source)  # other's camera frame from the source's
         self.A = other.K @ rotation @ np.linalg.inv(source.K)
         self.s = other.K @ translation
-        z = np.asarray(other_depth, np.float64)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.q_other = np.where(np.isfinite(z) & (z > 0), 1.0 / z, 0.0)
+        self.q_other = np.nan_to_num(_inv_depth(other_depth), nan=0.0)  # 0 where the other has no depth
         self.quant = quant
-        self.h, self.w = z.shape
+        self.h, self.w = self.q_other.shape
 
     def project(self, planes, px: _Pixels):
         """(u', v') in the other camera, the homogeneous ``w`` (N, 3), and whether the other
