@@ -16,14 +16,17 @@ docs/edges.md section 1 ("Ceilings of the band targets") has the figures (2026-1
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import sys
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]
 import bench_edges as be  # noqa: E402
+import ibr.render.supersample as supersample  # noqa: E402
 import ibr.render.upsample as upsample  # noqa: E402
 from ibr.render.view_synthesis import interpolate  # noqa: E402
 from ibr.synth import make_scene, render  # noqa: E402
@@ -49,51 +52,35 @@ def perfect_renderers(scene, truths):
 
 
 def perfect_sources(name, scene, truths):
-    rows, original = {}, upsample.upsample_view
     cams = [g.camera for g in truths]
-    for label, colour_k in (("supersample=3, exact 3x depth", None), ("supersample=3, exact 3x depth + colour", 3)):
-        def exact(view, k, colour_k=colour_k):
-            up = original(view, k)
-            big = render(scene, view.camera.resized(view.camera.width * k, view.camera.height * k),
-                         supersample=colour_k or 1)
-            color = up.color if colour_k is None else np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype)
-            return dataclasses.replace(up, depth=big.depth, color=color)
-
-        upsample.upsample_view = exact
-        try:
+    every_pixel = mock.patch.object(supersample, "edge_pixels", lambda depth_k, covered_k, k, tol: np.ones(
+        (depth_k.shape[0] // k, depth_k.shape[1] // k), bool))  # the truths' own box, not the edge pixels' only
+    rows = {}
+    for label, colour_k, boxed in (("supersample=3, exact 3x depth", None, contextlib.nullcontext()),
+                                   ("supersample=3, exact 3x depth + colour", 3, contextlib.nullcontext()),
+                                   ("the same, every pixel box-filtered", 3, every_pixel)):
+        with mock.patch.object(upsample, "upsample_view", _exact_upsampling(scene, colour_k)), boxed:
             a, b, _ = be.load_pair(name)  # fresh views: nothing cached
             frames = interpolate(a, b, cams, fill="none", supersample=3)
-        finally:
-            upsample.upsample_view = original
         rows[label] = be.edge_scores(frames, truths)[0]
-    rows["the same, every pixel box-filtered"] = _every_pixel_boxed(scene, name, cams, truths)
     a, b, _ = be.load_pair(name)
     rows["supersample=3 (today)"] = be.edge_scores(interpolate(a, b, cams, fill="none", supersample=3), truths)[0]
     return rows
 
 
-def _every_pixel_boxed(scene, name, cams, truths):
-    """Exact 3x depth and colour as above, every pixel the mean of its 3 x 3 subsamples (not the
-    edge pixels only, :func:`ibr.render.supersample.downsample_rendering`): the truths' own box."""
-    import ibr.render.supersample as supersample
-
-    original, edges = upsample.upsample_view, supersample.edge_pixels
+def _exact_upsampling(scene, colour_k):
+    """An ``upsample_view`` whose sources carry the scene's exact depth at k x k, and its exact
+    colour rendered with ``colour_k`` x ``colour_k`` samples (None: the upsampled colour)."""
+    original = upsample.upsample_view
 
     def exact(view, k):
         up = original(view, k)
-        big = render(scene, view.camera.resized(view.camera.width * k, view.camera.height * k), supersample=3)
-        return dataclasses.replace(up, depth=big.depth,
-                                   color=np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype))
+        big = render(scene, view.camera.resized(view.camera.width * k, view.camera.height * k),
+                     supersample=colour_k or 1)
+        color = up.color if colour_k is None else np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype)
+        return dataclasses.replace(up, depth=big.depth, color=color)
 
-    upsample.upsample_view = exact
-    supersample.edge_pixels = lambda depth_k, covered_k, k, tol: np.ones(
-        (depth_k.shape[0] // k, depth_k.shape[1] // k), bool)
-    try:
-        a, b, _ = be.load_pair(name)
-        frames = interpolate(a, b, cams, fill="none", supersample=3)
-    finally:
-        upsample.upsample_view, supersample.edge_pixels = original, edges
-    return be.edge_scores(frames, truths)[0]
+    return exact
 
 
 def main() -> int:
