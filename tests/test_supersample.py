@@ -268,6 +268,26 @@ def test_upsampled_depth_is_exact_on_a_tilted_plane_and_keeps_the_quantization()
     assert np.allclose(up.depth[inner], exact[inner], rtol=1e-5)
 
 
+def test_silhouette_subsamples_take_their_own_surfaces_tilted_plane():
+    """At the edge pixels each subsample gets the exact depth of the tilted plane on its side
+    (1/z extrapolated from the side's nearest pixel), not the neighbourhood's nearest or
+    farthest depth replicated (up to 2 % off: about a pixel of parallax)."""
+    from ibr.render.upsample import depth_edge_pixels, upsample_view
+
+    v = _edge_view(6.3, h=12)
+    u, r = np.meshgrid(np.arange(16, dtype=np.float64), np.arange(12, dtype=np.float64))
+    near_inv = lambda su, sv: 0.5 + 0.004 * su - 0.002 * sv  # noqa: E731  (1/z affine: planes)
+    far_inv = lambda su, sv: 0.25 + 0.001 * su + 0.0015 * sv  # noqa: E731
+    v = View(v.color, np.where(u < 6.3, 1 / near_inv(u, r), 1 / far_inv(u, r)).astype(np.float32), v.camera)
+    up = upsample_view(v, 3)
+    su, sv = np.meshgrid((np.arange(48) - 1) / 3.0, (np.arange(36) - 1) / 3.0)
+    exact = np.where(su < 6.3, 1 / near_inv(su, sv), 1 / far_inv(su, sv))
+    edge_k = np.repeat(np.repeat(depth_edge_pixels(v.depth), 3, 0), 3, 1)
+    rows = slice(3, -3)  # off the image's top and bottom rows, where subsamples clamp
+    assert edge_k[rows].sum() == 2 * 3 * 30
+    assert np.allclose(up.depth[rows][edge_k[rows]], exact[rows][edge_k[rows]], rtol=1e-5)
+
+
 def test_low_contrast_edges_are_not_split():
     """Where the near and far colours are too alike to read a coverage from, the edge pixel
     keeps its own depth for all its subsamples (replicated)."""
