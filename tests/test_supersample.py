@@ -288,6 +288,28 @@ def test_silhouette_subsamples_take_their_own_surfaces_tilted_plane():
     assert np.allclose(up.depth[rows][edge_k[rows]], exact[rows][edge_k[rows]], rtol=1e-5)
 
 
+@pytest.mark.parametrize("x_edge", [6.1, 6.2])
+def test_a_receding_limb_pixel_is_split_as_the_foreground(x_edge):
+    """A foreground whose last pixel before the silhouette recedes 3 % from its neighbour (a
+    sphere's limb) over a far plane: that mixed pixel is still the foreground's, so its
+    subsamples split at the true edge (the far ones at the far depth), not all kept in front.
+    (At x_edge 6.3 the subsample at 6.33 stays in front: with no clean pixel in the 3 x 3 the
+    foreground colour is the mean of the near side's pixels, the mixed ones above and below
+    included, and the coverage reads 0.89 for 0.8; a 5 x 5 ring of clean pixels for it
+    changed no scene's band, docs/edges.md.)"""
+    from ibr.render.upsample import upsample_view
+
+    v = _edge_view(x_edge)
+    u = np.arange(16, dtype=np.float64)
+    inv = 0.5 + 0.005 * (6 - u)
+    inv[6] = inv[5] * 0.97
+    depth = np.where(u < x_edge, 1 / inv, 4.0)
+    up = upsample_view(View(v.color, np.tile(depth, (6, 1)).astype(np.float32), v.camera), 3)
+    sub_u = (np.arange(48) - 1) / 3.0
+    cols = slice(3, 45)  # the outermost subsamples clamp at the image border
+    assert np.array_equal(up.depth[9, cols] > 3.0, sub_u[cols] >= x_edge), (up.depth[9], x_edge)
+
+
 def test_low_contrast_edges_are_not_split():
     """Where the near and far colours are too alike to read a coverage from, the edge pixel
     keeps its own depth for all its subsamples (replicated)."""
