@@ -290,8 +290,8 @@ def test_silhouette_subsamples_take_their_own_surfaces_tilted_plane():
 
 @pytest.mark.parametrize("x_edge", [6.1, 6.2])
 def test_a_receding_limb_pixel_is_split_as_the_foreground(x_edge):
-    """A foreground whose last pixel before the silhouette recedes 3 % from its neighbour (a
-    sphere's limb) over a far plane: that mixed pixel is still the foreground's, so its
+    """A foreground whose last pixel before the silhouette recedes 2.5 % from its neighbour (a
+    sphere's limb: 1.5 % beyond the neighbour's plane) over a far plane: that mixed pixel is still the foreground's, so its
     subsamples split at the true edge (the far ones at the far depth), not all kept in front.
     (At x_edge 6.3 the subsample at 6.33 stays in front: with no clean pixel in the 3 x 3 the
     foreground colour is the mean of the near side's pixels, the mixed ones above and below
@@ -302,7 +302,7 @@ def test_a_receding_limb_pixel_is_split_as_the_foreground(x_edge):
     v = _edge_view(x_edge)
     u = np.arange(16, dtype=np.float64)
     inv = 0.5 + 0.005 * (6 - u)
-    inv[6] = inv[5] * 0.97
+    inv[6] = inv[5] * 0.975
     depth = np.where(u < x_edge, 1 / inv, 4.0)
     up = upsample_view(View(v.color, np.tile(depth, (6, 1)).astype(np.float32), v.camera), 3)
     sub_u = (np.arange(48) - 1) / 3.0
@@ -317,6 +317,32 @@ def test_low_contrast_edges_are_not_split():
 
     up = upsample_view(_edge_view(6.3, fg=60.0, bg=40.0), 3)
     assert np.array_equal(up.depth[9, 18:21], np.full(3, 2.0, np.float32))  # pixel 6: its centre is near
+
+
+@pytest.mark.parametrize("slope, x0", [(0.15, 9.6), (0.3, 8.2), (0.6, 5.1), (0.0, 9.3)])
+def test_a_low_contrast_slanted_silhouette_follows_the_smoothed_staircase(slope, x0):
+    """Where the colours cannot tell the coverage (one colour on both sides) a slanted
+    silhouette u = x0 + slope v is cut inside the edge pixels along the depth's staircase
+    smoothed: at most 3/4 of the subsamples the replicated staircase puts on the wrong side; a
+    silhouette along a pixel column stays exactly where the staircase has it."""
+    from ibr.render.upsample import depth_edge_pixels, upsample_view
+
+    h = w = 24
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    near = u < x0 + slope * v
+    z = np.where(near, 2.0, 4.0).astype(np.float32)
+    up = upsample_view(View(np.full((h, w, 3), 90, np.uint8), z, Camera(20.0, 20.0, (w - 1) / 2, (h - 1) / 2, w, h)), 3)
+    sv, su = (np.mgrid[0:3 * h, 0:3 * w] - 1) / 3.0  # subsample centres in source pixel units
+    exact = su < x0 + slope * sv
+    staircase = np.repeat(np.repeat(near, 3, 0), 3, 1)
+    edge_k = np.repeat(np.repeat(depth_edge_pixels(z), 3, 0), 3, 1)
+    edge_k[:9] = edge_k[-9:] = False  # off the rows whose 5 x 5 leaves the image
+    wrong_ours = int(((up.depth < 3.0) != exact)[edge_k].sum())
+    wrong_staircase = int((staircase != exact)[edge_k].sum())
+    if slope == 0.0:
+        assert np.array_equal(up.depth < 3.0, staircase)
+    else:
+        assert wrong_ours <= 0.75 * wrong_staircase, (wrong_ours, wrong_staircase)
 
 
 def test_invalid_depth_stays_where_it_is():
