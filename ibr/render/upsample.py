@@ -63,6 +63,7 @@ MIN_CONTRAST = 60.0 / 255.0
 #: silhouette's colours cannot tell its coverage (:func:`_staircase_sides`).
 STAIRCASE_SIGMA = 1.0
 _NEIGHBOURS = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
+_OFFSETS = np.array(_NEIGHBOURS).T  # (2, 9): dy, dx of each neighbour
 
 
 def depth_edge_pixels(depth: np.ndarray, rel: float = EDGE_REL, quantization=None) -> np.ndarray:
@@ -155,39 +156,38 @@ def _place_silhouettes(depth_k: np.ndarray, depth: np.ndarray, color: np.ndarray
         mid = 0.5 * (1.0 / zmin + 1.0 / zmax)
         near = 1.0 / zs > mid[:, None]
         far = 1.0 / zs <= mid[:, None]  # NaN (outside the image, invalid): neither
-    fg, bg = _mean_color(cs, near, clean), _mean_color(cs, far, clean)
-    diff = fg - bg
-    contrast2 = (diff * diff).sum(1)
-    alpha = np.clip(((color[py, px] - bg) * diff).sum(1) / np.maximum(contrast2, 1e-12), 0.0, 1.0)
+    alpha, tell = _colour_coverage(color[py, px], cs, near, far, clean)
     zp = z[py, px]
-    own_near = _continues_nearer_surface(z, py, px, zmin, mid, near, far)
-    tell = contrast2 >= MIN_CONTRAST**2 * color.shape[2]
-    alpha = np.where(tell, alpha, own_near.astype(np.float64))
-    ny, nx = _normal(near, far)
-    # the edge n.x = d whose near side covers ``alpha`` of the pixel: a linear ramp over the
-    # pixel's extent along n (exact for an edge along a row or column); the centre subsample
-    # (n.x = 0) keeps the side its depth says
-    offset = (alpha - 0.5) * (np.abs(ny) + np.abs(nx))
-    offset = np.where(own_near, np.maximum(offset, 1e-9), np.minimum(offset, 0.0))
+    planes = _neighbour_planes(z, py, px)
+    own_near = _continues_nearer_surface(zp, zmin, mid, near, planes)
     sub = (np.arange(k) + 0.5) / k - 0.5
-    sy, sx = np.meshgrid(sub, sub, indexing="ij")
-    proj = ny[:, None] * sy.ravel()[None] + nx[:, None] * sx.ravel()[None]  # (n, k*k)
-    is_near = proj < offset[:, None]
+    sy, sx = (a.ravel() for a in np.meshgrid(sub, sub, indexing="ij"))
+    is_near = _straight_edge_sides(alpha, own_near, near, far, sy, sx)
     # where the colours cannot tell, the silhouette follows the depth's staircase smoothed
-    is_near[~tell] = _staircase_sides(z, py[~tell], px[~tell], mid[~tell], own_near[~tell], sy.ravel(), sx.ravel())
-    q_near, q_far = _side_inv_depths(z, py, px, near, far, sy.ravel(), sx.ravel())
+    is_near[~tell] = _staircase_sides(z, py[~tell], px[~tell], mid[~tell], own_near[~tell], sy, sx)
     # each side's extrapolated plane, trusted within EDGE_REL of the side's own pixel depth
-    # (today's value: the pixel's own on its side, the neighbourhood's extreme on the other)
-    q_near = _within(q_near, np.where(own_near, 1.0 / zp, 1.0 / zmin)[:, None])
-    q_far = _within(q_far, np.where(own_near, 1.0 / zmax, 1.0 / zp)[:, None])
+    # (the pixel's own on its side, the neighbourhood's extreme on the other)
+    q_near = _within(_side_plane_at(planes, near, sy, sx), np.where(own_near, 1.0 / zp, 1.0 / zmin)[:, None])
+    q_far = _within(_side_plane_at(planes, far, sy, sx), np.where(own_near, 1.0 / zmax, 1.0 / zp)[:, None])
     inv = np.where(is_near, q_near, q_far)
     for idx in range(k * k):
         iy, ix = divmod(idx, k)
         depth_k[py * k + iy, px * k + ix] = 1.0 / inv[:, idx]
 
 
-def _continues_nearer_surface(z, py, px, zmin, mid, near, far):
-    """(n,) bool: the edge pixels ``(py, px)`` that belong to their neighbourhood's nearer
+def _straight_edge_sides(alpha, own_near, near, far, sy, sx):
+    """(n, s) bool: the subsamples at offsets ``(sy, sx)`` (px, from the pixel centre) on the
+    nearer side of the straight edge n.x = d (n: :func:`_normal`) whose nearer side covers
+    ``alpha`` of the pixel, a linear ramp over the pixel's extent along n (exact for an edge
+    along a row or column); the centre subsample (n.x = 0) keeps the pixel's own side."""
+    ny, nx = _normal(near, far)
+    offset = (alpha - 0.5) * (np.abs(ny) + np.abs(nx))
+    offset = np.where(own_near, np.maximum(offset, 1e-9), np.minimum(offset, 0.0))
+    return ny[:, None] * sy[None] + nx[:, None] * sx[None] < offset[:, None]
+
+
+def _continues_nearer_surface(zp, zmin, mid, near, planes):
+    """(n,) bool: the edge pixels (depth ``zp``) that belong to their neighbourhood's nearer
     surface: on its side of the midpoint ``mid`` of the inverse depths, and within
     :data:`EDGE_REL` of the nearest depth ``zmin`` or of the plane of their nearest nearer
     neighbour extrapolated to their centre (a sphere's limb pixel receding more than that from
@@ -196,10 +196,9 @@ def _continues_nearer_surface(z, py, px, zmin, mid, near, far):
     motorcycle's ``supersample=3`` render 28.29 -> 28.15 dB over all covered pixels (clutter's
     band 31.54 -> 31.60); within 2 % of ``zmin`` only, as until the eighteenth session, put
     clutter's band 31.54 -> 31.27 (room 32.37 -> 32.35, motorcycle 28.29)."""
-    zp = z[py, px]
     others = near.copy()
     others[:, 4] = False
-    q_plane = _side_inv_depths(z, py, px, others, far, np.zeros(1), np.zeros(1))[0][:, 0]
+    q_plane = _side_plane_at(planes, others, np.zeros(1), np.zeros(1))[:, 0]
     with np.errstate(divide="ignore", invalid="ignore"):
         q = 1.0 / zp
         continues = (zp <= zmin * (1 + EDGE_REL)) | (np.abs(q - q_plane) <= EDGE_REL * q_plane)
@@ -239,34 +238,30 @@ def _within(q, q_side):
     return np.where(ok, q, q_side)
 
 
-def _side_inv_depths(z, py, px, near, far, sy, sx):
-    """(n, s) inverse depths of the nearer and of the farther surface at the subsample offsets
-    ``(sy, sx)`` (px, from the pixel centre) of the edge pixels ``(py, px)``: the 1/z plane of
-    the side's pixel nearest to the subsample (``near`` / ``far``: (n, 9) masks over the 3 x 3
-    neighbourhood), extrapolated with that pixel's within-surface gradient
-    (:func:`_surface_gradient`). Subsample depths replicated from the neighbourhood instead put
-    clutter's edge band 0.24 dB lower under ``supersample=3`` (room 0.09)."""
+def _neighbour_planes(z, py, px):
+    """(q, gy, gx), each (n, 9): the inverse depth of the 3 x 3 neighbours of the edge pixels
+    ``(py, px)`` (row-major, clamped at the image border) and its within-surface gradient
+    (:func:`_surface_gradient`, px^-1): the 1/z plane each neighbour's surface has there."""
     h, w = z.shape
     with np.errstate(divide="ignore"):
         q = 1.0 / z
     gy, gx = _surface_gradient(q)
-    oy = np.array([o[0] for o in _NEIGHBOURS])
-    ox = np.array([o[1] for o in _NEIGHBOURS])
-    jy = np.clip(py[:, None] + oy, 0, h - 1)
-    jx = np.clip(px[:, None] + ox, 0, w - 1)
-    qn, gyn, gxn = q[jy, jx][:, None], gy[jy, jx][:, None], gx[jy, jx][:, None]  # (n, 1, 9)
-    dy = sy[:, None] - oy  # (s, 9): subsample offset from each neighbour's centre
-    dx = sx[:, None] - ox
-    planes = qn + gyn * dy + gxn * dx  # (n, s, 9)
-    dist = np.hypot(dy, dx)[None]
-    rows = np.arange(py.size)[:, None]
-    cols = np.arange(sy.size)[None]
+    jy = np.clip(py[:, None] + _OFFSETS[0], 0, h - 1)
+    jx = np.clip(px[:, None] + _OFFSETS[1], 0, w - 1)
+    return q[jy, jx], gy[jy, jx], gx[jy, jx]
 
-    def nearest(side):
-        j = np.argmin(np.where(side[:, None], dist, np.inf), axis=2)
-        return planes[rows, cols, j]
 
-    return nearest(near), nearest(far)
+def _side_plane_at(planes, side, sy, sx):
+    """(n, s) inverse depth at the subsample offsets ``(sy, sx)`` (px, from the pixel centre) of
+    the plane of the ``side`` neighbour ((n, 9) mask) nearest to each subsample. Subsample
+    depths replicated from the neighbourhood instead put clutter's edge band 0.24 dB lower under
+    ``supersample=3`` (room 0.09)."""
+    q, gy, gx = (a[:, None] for a in planes)  # (n, 1, 9)
+    dy = sy[:, None] - _OFFSETS[0]  # (s, 9): subsample offset from each neighbour's centre
+    dx = sx[:, None] - _OFFSETS[1]
+    at = q + gy * dy + gx * dx  # (n, s, 9)
+    j = np.argmin(np.where(side[:, None], np.hypot(dy, dx)[None], np.inf), axis=2)
+    return np.take_along_axis(at, j[..., None], axis=2)[..., 0]
 
 
 def _surface_gradient(q: np.ndarray):
@@ -305,6 +300,17 @@ def _neighbourhoods(z, color, edge, py, px):
     return zs, cs, clean
 
 
+def _colour_coverage(c, cs, near, far, clean):
+    """(alpha, tell), each (n,): the foreground coverage ``(C - B).(F - B) / |F - B|^2`` of the
+    edge pixels' colours ``c`` in [0, 1] (F, B: :func:`_mean_color` of the nearer and farther
+    side), and whether F and B differ enough to read it (:data:`MIN_CONTRAST`)."""
+    fg, bg = _mean_color(cs, near, clean), _mean_color(cs, far, clean)
+    diff = fg - bg
+    contrast2 = (diff * diff).sum(1)
+    alpha = np.clip(((c - bg) * diff).sum(1) / np.maximum(contrast2, 1e-12), 0.0, 1.0)
+    return alpha, contrast2 >= MIN_CONTRAST**2 * c.shape[1]
+
+
 def _mean_color(cs, side, clean):
     """Mean colour of the clean pixels of ``side`` (all of ``side`` where none is clean)."""
     use = side & clean
@@ -316,8 +322,7 @@ def _mean_color(cs, side, clean):
 def _normal(near, far):
     """Unit edge normal per pixel (y, x), from its nearer neighbours' centroid toward its
     farther ones' (0, 0 where they coincide)."""
-    oy = np.array([o[0] for o in _NEIGHBOURS], np.float64)
-    ox = np.array([o[1] for o in _NEIGHBOURS], np.float64)
+    oy, ox = _OFFSETS.astype(np.float64)
 
     def centroid(sel):
         wgt = sel.astype(np.float64)
