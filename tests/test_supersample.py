@@ -291,8 +291,9 @@ def test_silhouette_subsamples_take_their_own_surfaces_tilted_plane():
 @pytest.mark.parametrize("x_edge", [6.1, 6.2])
 def test_a_receding_limb_pixel_is_split_as_the_foreground(x_edge):
     """A foreground whose last pixel before the silhouette recedes 2.5 % from its neighbour (a
-    sphere's limb: 1.5 % beyond the neighbour's plane) over a far plane: that mixed pixel is still the foreground's, so its
-    subsamples split at the true edge (the far ones at the far depth), not all kept in front.
+    sphere's limb: 1.5 % beyond the neighbour's plane) over a far plane: that mixed pixel is
+    still the foreground's, so its subsamples split at the true edge (the far ones at the far
+    depth), not all kept in front.
     (At x_edge 6.3 the subsample at 6.33 stays in front: with no clean pixel in the 3 x 3 the
     foreground colour is the mean of the near side's pixels, the mixed ones above and below
     included, and the coverage reads 0.89 for 0.8; a 5 x 5 ring of clean pixels for it
@@ -310,9 +311,10 @@ def test_a_receding_limb_pixel_is_split_as_the_foreground(x_edge):
     assert np.array_equal(up.depth[9, cols] > 3.0, sub_u[cols] >= x_edge), (up.depth[9], x_edge)
 
 
-def test_low_contrast_edges_are_not_split():
-    """Where the near and far colours are too alike to read a coverage from, the edge pixel
-    keeps its own depth for all its subsamples (replicated)."""
+def test_low_contrast_edges_along_a_column_are_not_split():
+    """Where the near and far colours are too alike to read a coverage from, an edge pixel of a
+    silhouette along a pixel column keeps its own depth for all its subsamples (the smoothed
+    staircase is the column's edge)."""
     from ibr.render.upsample import upsample_view
 
     up = upsample_view(_edge_view(6.3, fg=60.0, bg=40.0), 3)
