@@ -36,7 +36,7 @@ import numpy as np
 
 from ..base.depth import DepthQuantization
 from ..base.validate import check_array, check_finite_scalar
-from .quad_mesh import QuadMesh, _inv_depth
+from .quad_mesh import QuadMesh, _inv_depth, _rect_areas
 
 __all__ = ["ACCEPT_CODES", "GROW", "ITERATIONS", "MAX_WINDOW_PIXELS", "REJECT_AFTER", "REJECT_CODES", "RIDGE",
            "SPLIT_SHARE", "SURFACE_STEP_CODES", "fit_mesh_in_code_bins", "fit_planes_in_code_bins"]
@@ -132,7 +132,7 @@ def fit_mesh_in_code_bins(mesh: QuadMesh, depth, quads=None, *, tolerance=None) 
     tol = _split_tolerance(mesh, tolerance)
     planes, fitted, gaps = _fit_quads(mesh, codes, quads)
     rects, origin = np.asarray(mesh.rects, np.int64), np.arange(len(mesh.rects))
-    halve = fitted & (gaps > tol) & (_areas(rects) > 1)
+    halve = fitted & (gaps > tol) & (_rect_areas(rects) > 1)
     parts = _split(codes, rects[halve], planes[halve], origin[halve], tol)
     rects, planes, origin = (np.concatenate(x) for x in zip((rects[~halve], planes[~halve], origin[~halve]), parts))
     info = {**mesh.info, "bin_fitted_quads": int(fitted.sum()),
@@ -155,7 +155,7 @@ def _split(codes: "_Codes", rects, planes, origin, tol) -> tuple[np.ndarray, np.
         kept = np.tile(~whole, 2)
         halves, half_origin, got, gap, ok = halves[kept], half_origin[kept], got[kept], gap[kept], ok[kept]
         half_planes = np.where(ok[:, None], got, np.tile(planes[~whole], (2, 1)))
-        again = ok & (gap > tol) & (_areas(halves) > 1)
+        again = ok & (gap > tol) & (_rect_areas(halves) > 1)
         done.append((halves[~again], half_planes[~again], half_origin[~again]))
         rects, planes, origin = halves[again], half_planes[again], half_origin[again]
     if not done:
@@ -181,10 +181,6 @@ def _split_tolerance(mesh: QuadMesh, tolerance) -> float:
     except (TypeError, ValueError):
         raise TypeError(f"mesh: info['tolerance_inv_depth'] and info['quantization_allowance_inv_depth'] "
                         f"should be numbers, got {own!r} and {allowance!r}") from None
-
-
-def _areas(rects) -> np.ndarray:
-    return (rects[:, 2] - rects[:, 0]) * (rects[:, 3] - rects[:, 1])
 
 
 def _halves(rects) -> np.ndarray:

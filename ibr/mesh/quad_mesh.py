@@ -93,8 +93,7 @@ class QuadMesh:
     @property
     def areas(self) -> np.ndarray:
         """(Q,) number of source pixels covered by each quad."""
-        r = self.rects.astype(np.int64)
-        return (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])
+        return _rect_areas(self.rects)
 
     @property
     def one_pixel_share(self) -> float:
@@ -180,6 +179,12 @@ def fit_inv_depth_planes(depth, rects) -> np.ndarray:
     if len(r) and not np.isfinite(q[_rect_pixels_mask(r, q.shape)]).all():
         raise ValueError("rects: cover pixels with invalid depth")
     return fit_planes_inv_depth(q, r)
+
+
+def _rect_areas(rects) -> np.ndarray:
+    """(N,) pixels of each rect ``(x0, y0, x1, y1)`` (exclusive ends), int64."""
+    r = np.asarray(rects, np.int64)
+    return (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1])
 
 
 def _rect_pixels_mask(rects, shape) -> np.ndarray:

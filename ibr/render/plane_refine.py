@@ -192,14 +192,14 @@ def _quads_to_fit(mesh: QuadMesh, depth, quant: DepthQuantization) -> np.ndarray
     0.01 code); on the real motorcycle pair (its disparity rounded to integers) fitting the quads
     spanning five codes or more to the colour moved them off the ground truth (0.065 -> 0.32 px
     rms)."""
-    r, qop = mesh.rects, mesh.quad_of_pixel
+    qop = mesh.quad_of_pixel
     q = _inv_depth(depth)  # NaN where no depth
     valid = (qop >= 0) & np.isfinite(q)
     code = q[valid] / quant.inv_step(q[valid])  # the code index (disparity, or z / step)
-    hi, lo = np.full(len(r), -np.inf), np.full(len(r), np.inf)
+    hi, lo = np.full(len(mesh), -np.inf), np.full(len(mesh), np.inf)
     np.maximum.at(hi, qop[valid], code)
     np.minimum.at(lo, qop[valid], code)
-    large = (r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1]) >= MIN_AREA
+    large = mesh.areas >= MIN_AREA
     return np.append(large & (hi - lo <= SPAN_CODES + 1e-6), False)
 
 
