@@ -158,13 +158,15 @@ def _place_silhouettes(depth_k: np.ndarray, depth: np.ndarray, color: np.ndarray
         far = 1.0 / zs <= mid[:, None]  # NaN (outside the image, invalid): neither
     alpha, tell = _colour_coverage(color[py, px], cs, near, far, clean)
     zp = z[py, px]
-    planes = _neighbour_planes(z, py, px)
+    with np.errstate(divide="ignore"):
+        q = 1.0 / z  # NaN where the depth is NaN
+    planes = _neighbour_planes(q, py, px)
     own_near = _continues_nearer_surface(zp, zmin, mid, near, planes)
     sub = (np.arange(k) + 0.5) / k - 0.5
     sy, sx = (a.ravel() for a in np.meshgrid(sub, sub, indexing="ij"))
     is_near = _straight_edge_sides(alpha, own_near, near, far, sy, sx)
     # where the colours cannot tell, the silhouette follows the depth's staircase smoothed
-    is_near[~tell] = _staircase_sides(z, py[~tell], px[~tell], mid[~tell], own_near[~tell], sy, sx)
+    is_near[~tell] = _staircase_sides(q, py[~tell], px[~tell], mid[~tell], own_near[~tell], sy, sx)
     # each side's extrapolated plane, trusted within EDGE_REL of the side's own pixel depth
     # (the pixel's own on its side, the neighbourhood's extreme on the other)
     q_near = _within(_side_plane_at(planes, near, sy, sx), np.where(own_near, 1.0 / zp, 1.0 / zmin)[:, None])
@@ -205,27 +207,26 @@ def _continues_nearer_surface(zp, zmin, mid, near, planes):
         return (q > mid) & continues
 
 
-def _staircase_sides(z, py, px, mid, own_near, sy, sx):
+def _staircase_sides(q, py, px, mid, own_near, sy, sx):
     """(n, s) bool: whether the subsamples at offsets ``(sy, sx)`` (px, from the pixel centre)
     of the edge pixels ``(py, px)`` lie on the nearer surface, by the share of nearer pixels
-    (inverse depth above ``mid``) in the pixel's 5 x 5 neighbourhood weighted by a Gaussian of
+    (inverse depth ``q`` above ``mid``) in the pixel's 5 x 5 neighbourhood weighted by a Gaussian of
     :data:`STAIRCASE_SIGMA` px around the subsample; a tie keeps the pixel's own side. The
     depth's whole-pixel staircase, smoothed: a slanted or curved silhouette is cut inside the
     pixels it crosses instead of along their edges (module docstring; with the sides by the
     midpoint alone sigma 0.7 / 1 / 1.2 / 1.6 gave clutter's band 31.60 / 31.60 / 31.63 / 31.54,
     room's 32.38 / 32.37 / 32.34 / 32.31)."""
-    h, w = z.shape
+    h, w = q.shape
     num = np.zeros((py.size, sy.size))
     den = np.zeros((py.size, sy.size))
     for dy in range(-2, 3):
         for dx in range(-2, 3):
             jy, jx = py + dy, px + dx
             inside = (jy >= 0) & (jy < h) & (jx >= 0) & (jx < w)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                q = 1.0 / z[np.clip(jy, 0, h - 1), np.clip(jx, 0, w - 1)]
-            valid = inside & np.isfinite(q)
+            qj = q[np.clip(jy, 0, h - 1), np.clip(jx, 0, w - 1)]
+            valid = inside & np.isfinite(qj)
             g = np.exp(-((sy - dy) ** 2 + (sx - dx) ** 2) / (2 * STAIRCASE_SIGMA**2))[None]
-            num += g * (valid & (q > mid))[:, None]
+            num += g * (valid & (qj > mid))[:, None]
             den += g * valid[:, None]
     share = num / np.maximum(den, 1e-300)
     return np.where(np.abs(share - 0.5) < 1e-9, own_near[:, None], share > 0.5)
@@ -238,13 +239,12 @@ def _within(q, q_side):
     return np.where(ok, q, q_side)
 
 
-def _neighbour_planes(z, py, px):
-    """(q, gy, gx), each (n, 9): the inverse depth of the 3 x 3 neighbours of the edge pixels
-    ``(py, px)`` (row-major, clamped at the image border) and its within-surface gradient
-    (:func:`_surface_gradient`, px^-1): the 1/z plane each neighbour's surface has there."""
-    h, w = z.shape
-    with np.errstate(divide="ignore"):
-        q = 1.0 / z
+def _neighbour_planes(q, py, px):
+    """(q, gy, gx), each (n, 9): the inverse depth (of the image ``q``) of the 3 x 3 neighbours
+    of the edge pixels ``(py, px)`` (row-major, clamped at the image border) and its
+    within-surface gradient (:func:`_surface_gradient`, px^-1): the 1/z plane each neighbour's
+    surface has there."""
+    h, w = q.shape
     gy, gx = _surface_gradient(q)
     jy = np.clip(py[:, None] + _OFFSETS[0], 0, h - 1)
     jx = np.clip(px[:, None] + _OFFSETS[1], 0, w - 1)
