@@ -13,7 +13,7 @@ import cli
 from ibr.base.camera import Camera
 from ibr.base.view import View
 from ibr.io import load_view, read_image
-from ibr.render.supersample import check_supersample, downsample_rendering, edge_pixels, supersampled_camera
+from ibr.render.supersample import check_supersample, downsample_rendering, supersampled_camera
 from ibr.render.view_synthesis import interpolate, warp
 from samples import DATA_DIR
 
@@ -137,30 +137,26 @@ def test_quantization_steps_are_no_silhouettes_for_the_upsampler():
     assert quantized[:, 29:31].all()
 
 
-def test_edge_pixels_and_box_filter_on_an_analytic_edge():
+def test_box_filter_on_an_analytic_edge():
     """A vertical edge two thirds of the way through pixel column 1 (k = 3): the near surface
-    (z = 2, colour 240) covers subsample columns 0..4, the far one (z = 5, colour 30) the rest.
-    Column 1 is the only edge pixel and gets exactly 2/3 * 240 + 1/3 * 30 = 170; the others
-    keep their centre subsample; depth, holes and filled are the centre subsample's."""
+    (z = 2, colour 240) covers subsample columns 0..4, the far one (z = 5, colour 30) the rest,
+    and a ramp runs down the far side. Every pixel is its subsamples' mean: column 1 exactly
+    2/3 * 240 + 1/3 * 30 = 170, column 2 its ramp's mean (not its centre); depth, holes and
+    filled are the centre subsample's; a pixel with an unfilled hole subsample keeps its centre."""
     k, h, w = 3, 2, 3
     depth = np.full((h * k, w * k), 5.0, np.float32)
     depth[:, :5] = 2.0
     color = np.where(depth[..., None] < 3, 240, 30).astype(np.uint8).repeat(3, axis=2)
+    color[:, 6:] += np.array([0, 3, 12], np.uint8)[:, None]  # columns 6, 7, 8 of pixel 2: 30, 33, 42
     holes = np.zeros(depth.shape, bool)
-    edge = edge_pixels(depth, ~holes, k, 0.02)
-    assert edge.tolist() == [[False, True, False]] * h
     c, z, ho, fi = downsample_rendering(color, depth, holes, holes, k)
-    assert c[..., 0].tolist() == [[240, 170, 30]] * h
+    assert c[..., 0].tolist() == [[240, 170, 35]] * h
     assert z.tolist() == [[2.0, 2.0, 5.0]] * h and not ho.any() and not fi.any()
-    # an unfilled hole subsample: not an edge pixel (nothing to average it with), centre kept
-    holes[0, 3] = True
-    depth[0, 3] = np.nan
-    assert not edge_pixels(depth, ~holes, k, 0.02)[0, 1]
-    # a depth difference under the tolerance is one surface
-    flat = np.full((k, k), 2.0, np.float32)
-    flat[0, 0] = 2.02
-    assert not edge_pixels(flat, np.ones((k, k), bool), k, 0.02).any()
-    assert edge_pixels(flat, np.ones((k, k), bool), k, 0.005).all()
+    holes[0, 3] = True  # pixel (0, 1): nothing to average this subsample with
+    c, *_ = downsample_rendering(color, depth, holes, np.zeros_like(holes), k)
+    assert c[0, :, 0].tolist() == [240, 240, 35]
+    c, *_ = downsample_rendering(color, depth, holes, holes, k)  # ... unless filled
+    assert c[0, :, 0].tolist() == [240, 170, 35]
 
 
 def test_interpolate_supersampled_is_sharper_at_edges(clutter):
@@ -370,25 +366,32 @@ def test_invalid_depth_stays_where_it_is():
 def test_the_helpers_refuse_bad_input_by_name():
     """Each public helper of the supersampling refuses wrong types, ranks, shapes and values with
     an error naming the argument."""
+    from ibr.render.superres import back_project, super_resolve_pair
     from ibr.render.upsample import depth_edge_pixels, upsample_view
 
     cam = Camera(20.0, 20.0, 7.5, 5.5, 16, 12)
+    src = _edge_view(6.3)
+    up3 = upsample_view(src, 3)
     z3 = np.ones((6, 6), np.float32)
     ok = np.ones((6, 6), bool)
     cases = [
         (lambda: supersampled_camera("cam", 3), TypeError, "camera"),
         (lambda: supersampled_camera(cam, 2), ValueError, "supersample"),
-        (lambda: edge_pixels(z3, ok, 3, 0.0), ValueError, "depth_tol"),
-        (lambda: edge_pixels(z3[0], ok, 3, 0.02), ValueError, "depth_k"),
-        (lambda: edge_pixels(z3, ok[:3], 3, 0.02), ValueError, "known_k"),
-        (lambda: edge_pixels(np.ones((5, 6), np.float32), np.ones((5, 6), bool), 3, 0.02), ValueError, "multiples"),
-        (lambda: downsample_rendering(np.zeros((6, 6, 3), np.uint8), z3, ~ok, ~ok, 3, depth_tol=-1), ValueError, "depth_tol"),
         (lambda: downsample_rendering(np.zeros((6, 6, 3), bool), z3, ~ok, ~ok, 3), ValueError, "color_k"),
         (lambda: depth_edge_pixels(np.ones(5, np.float32)), ValueError, "depth"),
         (lambda: depth_edge_pixels(z3, rel=float("nan")), ValueError, "rel"),
         (lambda: depth_edge_pixels(z3, quantization=0.1), TypeError, "quantization"),
         (lambda: upsample_view(View(np.zeros((12, 16, 3), np.uint8), None, cam), 3), ValueError, "view"),
         (lambda: upsample_view(_edge_view(6.3), 4), ValueError, "supersample"),
+        (lambda: back_project(np.zeros((6, 6, 3)), np.zeros((2, 3, 3)), 3), ValueError, "color_k"),
+        (lambda: back_project(np.zeros((6, 6, 3)), np.zeros((2, 2)), 3), ValueError, "color"),
+        (lambda: back_project(np.zeros((6, 6, 3)), np.zeros((2, 2, 3)), 2), ValueError, "supersample"),
+        (lambda: back_project(np.zeros((6, 6, 3)), np.zeros((2, 2, 3)), 3, iterations=-1), ValueError, "iterations"),
+        (lambda: super_resolve_pair((src, src), (src, up3), 3), ValueError, r"upsampled\[0\]"),
+        (lambda: super_resolve_pair((src, src), (up3, View(up3.color, None, up3.camera)), 3), ValueError,
+         r"upsampled\[1\]"),
+        (lambda: super_resolve_pair(src, (up3, up3), 3), TypeError, "sources"),
+        (lambda: super_resolve_pair((src, src), (up3, up3), 3, weight=0), ValueError, "weight"),
     ]
     for call, exc, name in cases:
         with pytest.raises(exc, match=name):

@@ -7,14 +7,15 @@ that dominate the error around depth edges (on clutter at t = 0.5, 217 of the ba
 pixels hold half its squared error). With ``supersample=k`` (odd) the sources are upsampled k
 x k with sub-pixel silhouettes (:func:`ibr.render.upsample.upsample_view`), the view is rendered
 into the same camera at k times the resolution (:meth:`Camera.resized`: the centre subsample of
-each pixel is its centre ray) and brought back with :func:`downsample_rendering`: at *edge
-pixels*, whose k x k subsamples see surfaces more than ``depth_tol`` apart, the colour is the
-mean of the subsamples (a box filter over the pixel, as the camera's); everywhere else it is
-the centre subsample (box-filtering interiors too blurred textures: the room pair lost 1.1 dB
-over all pixels). Depth, holes and filled pixels are the centre subsample's. Unlike the plain
-render, a supersampled one does not give a source back exactly at its own pose: its edge pixels
-take the mean of bicubic subsamples instead of the recorded mixed colour (clutter a: 821 pixels
-differ, by at most 22 levels).
+each pixel is its centre ray) and brought back with :func:`downsample_rendering`: every pixel
+whose subsamples all have a colour is their mean (a box filter over the pixel, as the camera's).
+Until the nineteenth session only *edge pixels* (subsamples more than 2 % apart in depth) were
+boxed and the others kept their centre subsample, since boxing interiors blurred the Lanczos
+textures (room -1.1 dB over all pixels); the sources' colour is now back-projected so that
+each pixel's subsamples average to it (:mod:`ibr.render.superres`), and boxing every pixel
+gains (clutter band 31.54 -> 31.77 dB with the back-projection). Depth, holes and filled pixels
+are the centre subsample's. A source rendered at its own pose comes back within one level (the
+rounding of nine subsamples; before: 821 of clutter a's pixels off by up to 22).
 
 Measured (``python benchmarks/bench_edges.py --quick``, k = 3, t = .25/.5/.75, covered pixels):
 clutter edge band 28.16 -> 31.02 dB, all covered pixels 37.07 -> 39.29 dB; room band 30.97 ->
@@ -30,9 +31,9 @@ import functools
 
 import numpy as np
 
-from ..base.validate import check_array, check_positive
+from ..base.validate import check_array
 
-__all__ = ["SUPERSAMPLES", "check_supersample", "downsample_rendering", "edge_pixels", "supersampled_camera"]
+__all__ = ["SUPERSAMPLES", "check_supersample", "downsample_rendering", "supersampled_camera"]
 
 #: Allowed factors: odd, so that each pixel's centre ray is one of its subsamples.
 SUPERSAMPLES = (1, 3, 5)
@@ -57,37 +58,6 @@ def supersampled_camera(camera, k: int):
     return camera if k == 1 else camera.resized(camera.width * k, camera.height * k)
 
 
-def edge_pixels(depth_k: np.ndarray, known_k: np.ndarray, k: int, depth_tol: float) -> np.ndarray:
-    """(H, W) bool: pixels whose k x k subsamples all have a colour (``known_k``: covered or
-    filled) and see depths more than ``depth_tol`` (relative) apart, or some with a depth and
-    some without (a filled hole beside a surface).
-
-    Parameters
-    ----------
-    depth_k : (k H, k W) float
-        Planar depth of the subsamples, NaN where none is known.
-    known_k : (k H, k W) bool
-        Subsamples with a colour (not an unfilled hole).
-    """
-    k = check_supersample(k)
-    depth_tol = check_positive("depth_tol", depth_tol)
-    depth_k = check_array("depth_k", depth_k, ndim=2, dtype_kind="f")
-    _check_multiple(depth_k.shape, k)
-    if np.shape(known_k) != np.shape(depth_k):
-        raise ValueError(f"known_k: expected shape {np.shape(depth_k)} (depth_k's), got {np.shape(known_k)}")
-    # k^2 strided planes of (H, W), reduced element-wise: a reduction over the axes of a
-    # (H, k, W, k) view took 30x as long (150 ms at 1536 x 1536, #13)
-    planes = _subsample_planes(np.asarray(depth_k), k)
-    zmax = functools.reduce(np.fmax, planes)  # NaN-ignoring: NaN only where every subsample is
-    zmin = functools.reduce(np.fmin, planes)
-    all_finite = functools.reduce(np.logical_and, [np.isfinite(p) for p in planes])
-    known = functools.reduce(np.logical_and, _subsample_planes(np.asarray(known_k, bool), k))
-    with np.errstate(invalid="ignore"):
-        step = zmax > zmin * (1.0 + depth_tol)  # False where every subsample is NaN
-    partial = np.isfinite(zmax) & ~all_finite
-    return known & (step | partial)
-
-
 def _check_multiple(shape, k: int) -> None:
     if len(shape) < 2 or shape[0] % k or shape[1] % k or not shape[0] or not shape[1]:
         raise ValueError(f"supersampled arrays: expected a shape of multiples of k = {k}, got {tuple(shape)}")
@@ -99,7 +69,7 @@ def _subsample_planes(a: np.ndarray, k: int) -> list:
     return [a[i::k, j::k] for i in range(k) for j in range(k)]
 
 
-def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int, depth_tol: float = 0.02):
+def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int):
     """The k x k supersampled arrays of a rendering brought back to the target's resolution.
 
     Parameters
@@ -112,17 +82,15 @@ def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int, depth_tol:
         Subsamples that no source covered, and those of them the fill wrote.
     k : int
         The odd factor (:func:`check_supersample`).
-    depth_tol : float
-        Relative depth difference that makes a pixel an edge pixel (:func:`edge_pixels`).
 
     Returns
     -------
     color, depth, holes, filled : arrays of (H, W[, C])
-        Colour: the subsamples' mean at edge pixels, else the centre subsample; depth, holes
-        and filled: the centre subsample's.
+        Colour: the subsamples' mean (a box filter, the camera's) where every subsample has a
+        colour (covered or filled), else the centre subsample's; depth, holes and filled: the
+        centre subsample's.
     """
     k = check_supersample(k)
-    depth_tol = check_positive("depth_tol", depth_tol)
     c = k // 2
     color_k = check_array("color_k", color_k, ndim=(2, 3), dtype_kind="uif")
     for name, a in (("depth_k", depth_k), ("holes_k", holes_k), ("filled_k", filled_k)):
@@ -136,11 +104,11 @@ def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int, depth_tol:
     filled = np.array(filled_k[centre], order="C")
     if k == 1:
         return color, depth, holes, filled
-    edge = edge_pixels(depth_k, ~holes_k | filled_k, k, depth_tol)
-    if edge.any():
-        h, w = edge.shape
+    known = functools.reduce(np.logical_and, _subsample_planes(~np.asarray(holes_k, bool) | filled_k, k))
+    if known.any():
+        h, w = known.shape
         blocks = color_k.reshape(h, k, w, k, -1)
-        ys, xs = np.nonzero(edge)
+        ys, xs = np.nonzero(known)
         mean = blocks[ys, :, xs].astype(np.float64).mean(axis=(1, 2))  # (n, C)
         if np.issubdtype(color.dtype, np.integer):
             mean = np.rint(mean)

@@ -9,7 +9,10 @@ gives :mod:`ibr.render.supersample` a source at k times the resolution in which
 * colour is Lanczos-4 (a sharper reconstruction than the renderer's bilinear taps; bicubic
   until the seventeenth session: ``supersample=3`` over all covered pixels clutter 39.31 ->
   39.40, room 39.92 -> 40.07 dB, the motorcycle 28.22 -> 28.25, grazing 43.56 either way; edge
-  band clutter 31.06 -> 31.11, room 32.21 -> 32.23, grazing 35.16 -> 35.07);
+  band clutter 31.06 -> 31.11, room 32.21 -> 32.23, grazing 35.16 -> 35.07), back-projected so
+  that each pixel's subsamples average to its colour (:func:`~ibr.render.superres.back_project`,
+  nineteenth session; an interpolation's two sources then refine each other's,
+  :func:`~ibr.render.superres.super_resolve_pair`);
 * depth is interpolated in 1/z (affine on planes) within each surface, and replicated where a
   pixel's neighbours lie on another surface;
 * at every depth-edge pixel (a 4-neighbour more than 2 % nearer or farther) the k x k
@@ -97,9 +100,9 @@ def depth_edge_pixels(depth: np.ndarray, rel: float = EDGE_REL, quantization=Non
 
 def upsample_view(view: View, k: int) -> View:
     """``view`` at k times its width and height (same camera view, :meth:`Camera.resized`), with
-    Lanczos-4 colour, depth interpolated in 1/z within surfaces and silhouettes placed inside the
-    depth-edge pixels by their colours (module docstring). ``k`` = 1 returns ``view``. The
-    depth's quantization (:func:`~ibr.base.depth.quantization_of`) carries over."""
+    back-projected Lanczos-4 colour, depth interpolated in 1/z within surfaces and silhouettes
+    placed inside the depth-edge pixels by their colours (module docstring). ``k`` = 1 returns
+    ``view``. The depth's quantization (:func:`~ibr.base.depth.quantization_of`) carries over."""
     from .supersample import check_supersample
 
     k = check_supersample(k)
@@ -109,13 +112,23 @@ def upsample_view(view: View, k: int) -> View:
         return view
     h, w = view.depth.shape
     camera = view.camera.resized(w * k, h * k)
-    color = cv2.resize(view.color, (w * k, h * k), interpolation=cv2.INTER_LANCZOS4)
-    if color.ndim < view.color.ndim:  # OpenCV drops a single channel axis: (H, W, 1) stays 3-D
-        color = color[..., None]
+    color = _consistent_colour(view.color, k)
     depth = _smooth_depth(view.depth, k)
     q = quantization_of(view)
     _place_silhouettes(depth, view.depth, _unit_color(view.color), k, q)
     return set_quantization(View(color, depth, camera, view.name), q)
+
+
+def _consistent_colour(color: np.ndarray, k: int) -> np.ndarray:
+    """``color`` at k x k: Lanczos-4, then back-projected until each pixel's k x k mean is its
+    colour (:func:`~ibr.render.superres.back_project`), in ``color``'s dtype and layout."""
+    from .superres import as_colour, back_project, colour_limits
+
+    c = np.asarray(color)
+    h, w = c.shape[:2]
+    lanczos = cv2.resize(c, (w * k, h * k), interpolation=cv2.INTER_LANCZOS4)
+    up = back_project(lanczos.reshape(h * k, w * k, -1), c.reshape(h, w, -1), k, limits=colour_limits(c.dtype))
+    return as_colour(up, c.dtype, (h * k, w * k) + c.shape[2:])
 
 
 def _unit_color(color: np.ndarray) -> np.ndarray:

@@ -160,15 +160,33 @@ class _Source:
         cached on it like any view's. With ``refined_key`` (the options of a mesh of this source
         refined against its partner, :func:`_with_partners`) it is upsampled from that mesh's
         depth instead of its stored codes (:func:`_upsampled_pair`)."""
-        view = self._view()
         v = self._upsampled.get((k, refined_key))
         if v is None:
-            from .upsample import upsample_view
+            v = self._upsampled[(k, refined_key)] = self._upsample(k, refined_key)
+        return set_quantization(v, quantization_of(self._view()))  # as the view's is now (it may have been set since)
 
-            source = view if refined_key is None else _with_mesh_depth(view, source_mesh(view, **dict(refined_key)))
-            v = self._upsampled[(k, refined_key)] = upsample_view(source, k)
-        set_quantization(v, quantization_of(view))  # as the view's is now (it may have been set since)
-        return v
+    def _upsample(self, k: int, refined_key=None) -> View:
+        from .upsample import upsample_view
+
+        view = self._view()
+        source = view if refined_key is None else _with_mesh_depth(view, source_mesh(view, **dict(refined_key)))
+        return upsample_view(source, k)
+
+    def upsampled_with(self, partner: View, k: int, refined_key=None, partner_key=None) -> View:
+        """The source at k x k as :meth:`upsampled`, its colour refined together with
+        ``partner``'s (:func:`~ibr.render.superres.super_resolve_pair`); made once per pair
+        (the partner's is cached on it)."""
+        from .superres import super_resolve_pair
+
+        view, other = self._view(), _source(partner)
+        key, key_other = (k, refined_key, weakref.ref(partner), partner_key), (k, partner_key, self._view, refined_key)
+        if key not in self._upsampled or key_other not in other._upsampled:
+            self.drop_dead_partners()
+            ups = (self._upsample(k, refined_key), other._upsample(k, partner_key))
+            colours = super_resolve_pair((view, partner), ups, k)
+            self._upsampled[key], other._upsampled[key_other] = (View(c, u.depth, u.camera, u.name)
+                                                                 for c, u in zip(colours, ups))
+        return set_quantization(self._upsampled[key], quantization_of(view))
 
     def trust(self, mesh_key) -> np.ndarray:
         """(H, W, 2) float32 :func:`~ibr.render.composite.source_trust` of the source (mixed
@@ -646,13 +664,12 @@ def _check_target(camera, name="camera") -> Camera:
     return camera
 
 
-def _at_resolution(r: Rendering, camera: Camera, k: int, depth_tol: float) -> Rendering:
+def _at_resolution(r: Rendering, camera: Camera, k: int) -> Rendering:
     """``r``, rendered into ``camera`` supersampled k times (:mod:`ibr.render.supersample`),
-    brought back to ``camera``: box-filtered colour at depth edges, the centre subsample
-    elsewhere."""
+    brought back to ``camera``: box-filtered colour wherever every subsample has one."""
     if k == 1:
         return r
-    color, depth, holes, filled = downsample_rendering(r.color, r.depth, r.holes, r.filled, k, depth_tol)
+    color, depth, holes, filled = downsample_rendering(r.color, r.depth, r.holes, r.filled, k)
     return Rendering(color, depth, holes, filled, camera, r.t)
 
 
@@ -765,7 +782,7 @@ def warp(
     if comp is None:
         raise _nothing_seen(camera, [view.name], None)
     r = _finish(comp, cam_k, None, fill, None, view.color.ndim == 2, parallax_axis(camera, [view.camera]))
-    return _at_resolution(_antialias(r, edges), camera, k, 0.02)
+    return _at_resolution(_antialias(r, edges), camera, k)
 
 
 def _targets(view_a: View, view_b: View, t) -> tuple[list[Camera], list[float | None], bool]:
@@ -865,12 +882,13 @@ def _upsampled_pair(view_a, view_b, mesh_options: dict, lod: str, method: str, k
     other source (:mod:`ibr.render.plane_refine`) rather than from its codes (8-bit disparity,
     ``supersample=3``, against the exact depth's: clutter -0.94 -> -0.43 dB, room -0.32 -> -0.10;
     docs/edges.md section 3); its upsampled meshes still allow for the codes' quantization."""
-    if method != "mesh":
-        return _source(view_a).upsampled(k), _source(view_b).upsampled(k)
-    # the fitted meshes of the whole pair's span (one upsampled view per source and partner, whatever the frames)
-    opts = _pair_mesh_options(view_a, view_b, [view_a.camera, view_b.camera], mesh_options, lod)
-    return tuple(_source(v).upsampled(k, _mesh_key(o) if _PARTNER in o else None)
-                 for v, o in zip((view_a, view_b), opts))
+    keys = (None, None)
+    if method == "mesh":
+        # the fitted meshes of the whole pair's span (one upsampled view per source and partner, whatever the frames)
+        opts = _pair_mesh_options(view_a, view_b, [view_a.camera, view_b.camera], mesh_options, lod)
+        keys = tuple(_mesh_key(o) if _PARTNER in o else None for o in opts)
+    return (_source(view_a).upsampled_with(view_b, k, keys[0], keys[1]),
+            _source(view_b).upsampled_with(view_a, k, keys[1], keys[0]))
 
 
 def _with_mesh_depth(view: View, mesh) -> View:
@@ -939,7 +957,7 @@ def _frames(view_a, view_b, cams, ts, k, opts, *, method, footprint, splat, inte
             raise _nothing_seen(cam, [view_a.name, view_b.name], tv)
         previous = _antialias(_finish(comp, cam_k, tv, fill, previous, view_a.color.ndim == 2,
                                       parallax_axis(cam, [view_a.camera, view_b.camera])), edges)
-        yield _at_resolution(previous, cam, k, depth_tol)
+        yield _at_resolution(previous, cam, k)
 
 
 def interpolate(
