@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import functools
 
+import cv2
 import numpy as np
 
 from ..base.validate import check_array
@@ -104,13 +105,13 @@ def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int):
     filled = np.array(filled_k[centre], order="C")
     if k == 1:
         return color, depth, holes, filled
-    known = functools.reduce(np.logical_and, _subsample_planes(~np.asarray(holes_k, bool) | filled_k, k))
-    if known.any():
-        h, w = known.shape
-        blocks = color_k.reshape(h, k, w, k, -1)
-        ys, xs = np.nonzero(known)
-        mean = blocks[ys, :, xs].astype(np.float64).mean(axis=(1, 2))  # (n, C)
-        if np.issubdtype(color.dtype, np.integer):
-            mean = np.rint(mean)
-        color.reshape(h, w, -1)[ys, xs] = mean.astype(color.dtype)
+    # pixels whose subsamples all have a colour (covered or filled)
+    whole = functools.reduce(np.logical_and, _subsample_planes(~np.asarray(holes_k, bool) | filled_k, k))
+    # the block means by OpenCV's area resampling (exact at an integer factor; a gather of every
+    # pixel's block took twice the frame)
+    mean = cv2.resize(np.asarray(color_k, np.float32), (color.shape[1], color.shape[0]), interpolation=cv2.INTER_AREA)
+    if np.issubdtype(color.dtype, np.integer):
+        mean = np.rint(mean)
+    mean = mean.astype(color.dtype).reshape(color.shape)
+    np.copyto(color, mean, where=whole.reshape(whole.shape + (1,) * (color.ndim - 2)))
     return color, depth, holes, filled
