@@ -6,15 +6,16 @@ Edge band PSNR (bench_edges.edge_band, t = .25/.5/.75) of
    filter; the truths are k = 3) and with the antialias option's pattern (the centre counted
    twice and four diagonal subsamples at +-1/3 px): what perfect geometry and colour give;
 2. ``interpolate(..., supersample=3)`` with the sources' upsampling replaced by perfect 3x
-   sources: the scene's exact depth at 3x with the upsampled colour, then exact depth and colour
-   (3x3 supersampled at 3x): what this renderer gives from perfect sources; and the same with
-   every pixel box-filtered (the renderer keeps the centre subsample off the edges);
+   sources: the scene's exact depth at 3x with our colour, exact depth and colour (3x3
+   supersampled at 3x, not refined by the partner), our depth with the exact colour, and the
+   exact colour only at the source's depth-edge pixels (the renderer box-filters every pixel
+   since the nineteenth session, as the truths are made);
 3. our upsampled sources with the exact depth where ours is within 2 % of it (what better depth
    values of the surfaces would give) or at the edge subsamples ours puts on another surface
    (what better silhouette labels would give).
 
 Usage (from the repository root): ``python benchmarks/exp_band_ceilings.py`` (about 3 minutes).
-docs/edges.md section 1 ("Ceilings of the band targets") has the figures (2026-11-26).
+docs/edges.md section 1 ("Ceilings of the band targets") has the figures (2026-11-27).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ import numpy as np
 
 sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parents[1])]
 import bench_edges as be  # noqa: E402
-import ibr.render.supersample as supersample  # noqa: E402
+import ibr.render.superres as superres  # noqa: E402
 import ibr.render.upsample as upsample  # noqa: E402
 from ibr.render.view_synthesis import interpolate  # noqa: E402
 from ibr.synth import make_scene, render  # noqa: E402
@@ -56,13 +57,15 @@ def perfect_renderers(scene, truths):
 
 def perfect_sources(name, scene, truths):
     cams = [g.camera for g in truths]
-    every_pixel = mock.patch.object(supersample, "edge_pixels", lambda depth_k, covered_k, k, tol: np.ones(
-        (depth_k.shape[0] // k, depth_k.shape[1] // k), bool))  # the truths' own box, not the edge pixels' only
     rows = {}
-    for label, colour_k, boxed in (("supersample=3, exact 3x depth", None, contextlib.nullcontext()),
-                                   ("supersample=3, exact 3x depth + colour", 3, contextlib.nullcontext()),
-                                   ("the same, every pixel box-filtered", 3, every_pixel)):
-        with mock.patch.object(upsample, "upsample_view", _exact_upsampling(scene, colour_k)), boxed:
+    # the exact colour is not refined by the partner (superres) as ours is
+    as_given = mock.patch.object(superres, "super_resolve_pair", lambda sources, ups, k: tuple(u.color for u in ups))
+    for label, depth, colour in (("supersample=3, exact 3x depth", True, None),
+                                 ("supersample=3, exact 3x depth + colour", True, "all"),
+                                 ("supersample=3, our depth, exact 3x colour", False, "all"),
+                                 ("supersample=3, exact 3x colour at edge pixels only", False, "edge")):
+        with mock.patch.object(upsample, "upsample_view", _exact_upsampling(scene, depth, colour)), \
+                (as_given if colour else contextlib.nullcontext()):
             a, b, _ = be.load_pair(name)  # fresh views: nothing cached
             frames = interpolate(a, b, cams, fill="none", supersample=3)
         rows[label] = be.edge_scores(frames, truths)[0]
@@ -77,17 +80,22 @@ def perfect_sources(name, scene, truths):
     return rows
 
 
-def _exact_upsampling(scene, colour_k):
-    """An ``upsample_view`` whose sources carry the scene's exact depth at k x k, and its exact
-    colour rendered with ``colour_k`` x ``colour_k`` samples (None: the upsampled colour)."""
+def _exact_upsampling(scene, depth: bool, colour: str | None):
+    """An ``upsample_view`` whose sources carry the scene's exact depth at k x k (``depth``) and
+    its exact colour rendered with 3 x 3 samples per subsample (``colour`` = "all"; "edge": at
+    the subsamples of the source's depth-edge pixels only; None: ours)."""
     original = upsample.upsample_view
 
     def exact(view, k):
         up = original(view, k)
         big = render(scene, view.camera.resized(view.camera.width * k, view.camera.height * k),
-                     supersample=colour_k or 1)
-        color = up.color if colour_k is None else np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype)
-        return dataclasses.replace(up, depth=big.depth, color=color)
+                     supersample=3 if colour else 1)
+        color = up.color
+        if colour:
+            at = np.ones(up.depth.shape, bool) if colour == "all" else np.repeat(np.repeat(
+                upsample.depth_edge_pixels(view.depth), k, 0), k, 1)
+            color = np.where(at[..., None], np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype), color)
+        return dataclasses.replace(up, depth=big.depth if depth else up.depth, color=color)
 
     return exact
 

@@ -13,10 +13,10 @@ it blurs once more. Two steps mend this:
   again (within rounding): a source rendered at its own pose gives itself back;
 * :func:`super_resolve_pair` (the two sources of an interpolation): the same iteration with
   each source also explaining the other's pixels: the partner's k x k subsamples are mapped
-  through their depth into this source's upsampled image (bilinear), their k x k mean compared
-  with the partner's pixel, and that residual mapped back and averaged with the own one
-  (:data:`PARTNER_WEIGHT`) wherever both sources see the same surface (depths within
-  :data:`SAME_SURFACE_REL`). The two cameras see each surface at other sub-pixel phases and,
+  through their depth into this source's upsampled image (bilinear; those this source does not
+  see keep the partner's own colour), their k x k mean compared with the partner's pixel, and
+  that residual mapped back and averaged with the own one (:data:`PARTNER_WEIGHT`) wherever
+  both sources see the same surface (depths within :data:`SAME_SURFACE_REL`). The two cameras see each surface at other sub-pixel phases and,
   next to a silhouette, the background a mixed pixel hides at other distances from the
   outline, so the partner tells what one view's mean cannot: finer texture and unmixed
   colours on both sides of silhouettes.
@@ -26,12 +26,14 @@ not only the edge pixels (:func:`~ibr.render.supersample.downsample_rendering`).
 
 Measured (``python benchmarks/bench_edges.py --quick``, ``supersample=3``, t = .25/.5/.75,
 covered pixels; edge band / all covered, dB): clutter 31.54 / 39.59 -> 31.77 band with the own
-back-projection and the box over every pixel -> **32.03 / 40.39** with the partner's (eight
-iterations); room 32.37 / 40.07 -> 32.45 -> **32.93 / 41.50**; the motorcycle pair's one
-source 28.29 -> 28.29. More iterations sharpen the interiors further but lose at the
-silhouettes (a prototype at 20: clutter band 31.93, room 32.68 with all covered 42.11), so they
-stop at :data:`PAIR_ITERATIONS`; clamping the partner's residual (to 6 or 16 levels, against
-misregistration) changed nothing but lowered room at 6.
+back-projection and the box over every pixel -> **32.16 / 40.43** with the partner's (eight
+iterations; 32.03 with only the partner's pixels this source sees whole); room 32.37 / 40.07 ->
+32.45 -> **33.12 / 41.50** (32.93); the motorcycle pair's one source 28.29 -> 28.30. More
+iterations sharpen the interiors further but lose at the silhouettes (20: clutter band 31.93,
+room 32.68 with all covered 42.11, before the partial pixels), so they stop at
+:data:`PAIR_ITERATIONS`; clamping the partner's residual (to 6 or 16 levels, against
+misregistration) changed nothing but lowered room at 6; a partial pixel's residual scaled by
+the share this source sees: +0.01 dB.
 """
 
 from __future__ import annotations
@@ -113,11 +115,9 @@ def super_resolve_pair(sources: tuple[View, View], upsampled: tuple[View, View],
     _check_views(sources, upsampled, k)
     obs = [_channels(s.color).astype(np.float32) for s in sources]
     x = [_channels(u.color).astype(np.float32) for u in upsampled]
-    links = [_Link(upsampled[i], upsampled[1 - i], k) for i in (0, 1)]  # links[i]: i's subsamples in the other
-    for i in (0, 1):
-        links[i].explains(links[1 - i], k, weight)
+    links = [_Link(upsampled[i], upsampled[1 - i], k, weight) for i in (0, 1)]  # links[i]: i's subsamples in the other
     for _ in range(iterations):
-        steps = [_pair_step(xi, obs[i], obs[1 - i], links[i], links[1 - i], k) for i, xi in enumerate(x)]
+        steps = [_pair_step(xi, obs[i], x[1 - i], obs[1 - i], links[i], links[1 - i], k) for i, xi in enumerate(x)]
         for xi, step in zip(x, steps):
             xi += step
     limits = colour_limits(upsampled[0].color.dtype)
@@ -139,10 +139,11 @@ def _check_views(sources, upsampled, k: int) -> None:
 
 
 class _Link:
-    """Where one upsampled source's subsamples fall in the other's upsampled image, and which
-    of them the other sees (its depth there within :data:`SAME_SURFACE_REL`)."""
+    """Where one upsampled source's subsamples fall in the other's upsampled image, which of them
+    the other sees (its depth there within :data:`SAME_SURFACE_REL`), and the shares of the own
+    and the other's residual in their steps (the other's ``weight`` where it sees them)."""
 
-    def __init__(self, this: View, other: View, k: int):
+    def __init__(self, this: View, other: View, k: int, weight: float):
         h, w = this.depth.shape
         v, u = np.mgrid[0:h, 0:w].astype(np.float64)
         with np.errstate(invalid="ignore"):
@@ -152,19 +153,10 @@ class _Link:
         z_other = cv2.remap(np.asarray(other.depth, np.float32), mu, mv, cv2.INTER_NEAREST,
                             borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
         with np.errstate(invalid="ignore"):
-            self.seen = np.abs(z_other - z) <= SAME_SURFACE_REL * z  # (k H, k W)
+            self.seen = (np.abs(z_other - z) <= SAME_SURFACE_REL * z)[..., None]  # (k H, k W, 1)
         self.maps = cv2.convertMaps(mu, mv, cv2.CV_16SC2)  # fixed point: remaps twice as fast
-        # the pixels whose k x k subsamples the other sees, all of them (their mean is comparable)
-        self.pixel_seen = _box(self.seen.astype(np.float32), k) > 1 - 1e-4  # (H, W)
-
-    def explains(self, other: "_Link", k: int, weight: float) -> None:
-        """Set the shares of the own and the other's residual in each subsample's step: the
-        other's (``weight``) where the other sees the subsample inside one of its pixels that
-        this source sees whole, else none."""
-        whole = np.repeat(np.repeat(other.pixel_seen, k, 0), k, 1).astype(np.uint8)
-        inside = cv2.remap(whole, self.maps[0], self.maps[1], cv2.INTER_NEAREST, borderValue=0)
-        used = (self.seen & inside.astype(bool))[..., None]
-        self.own_share = (1.0 / (1.0 + weight * used)).astype(np.float32)
+        self.pixel_seen = (_box(self.seen.astype(np.float32), k) > 0).reshape(h // k, w // k, 1)  # in part
+        self.own_share = (1.0 / (1.0 + weight * self.seen)).astype(np.float32)
         self.other_share = (1.0 - self.own_share).astype(np.float32)
 
     def sample(self, image: np.ndarray) -> np.ndarray:
@@ -172,13 +164,15 @@ class _Link:
         return _remap(image, self.maps)
 
 
-def _pair_step(x, obs, obs_other, link, link_other, k):
-    """The step of one source: its own residual and, where both see it, the other's, weighted
-    (:meth:`_Link.explains`)."""
+def _pair_step(x, obs, x_other, obs_other, link, link_other, k):
+    """The step of one source: its own residual and, where the other sees it, the other's,
+    weighted (:class:`_Link`). The other's pixels as this source explains them: their
+    subsamples this source sees read in its image, the others the other's own (a pixel the
+    other sees beside a silhouette that hides part of it from this source still tells)."""
     own = _spread(obs - _box(x, k), k, cv2.INTER_LINEAR)
-    # the other's pixels as this source explains them: their subsamples read in this image
-    residual = obs_other - _box(link_other.sample(x), k)
-    residual *= link_other.pixel_seen[..., None]
+    explained = np.where(link_other.seen, link_other.sample(x), x_other)
+    residual = obs_other - _box(explained, k)
+    residual *= link_other.pixel_seen
     back = link.sample(_spread(residual, k, cv2.INTER_LINEAR))
     own *= link.own_share
     back *= link.other_share
