@@ -115,7 +115,7 @@ def super_resolve_pair(sources: tuple[View, View], upsampled: tuple[View, View],
     _check_views(sources, upsampled, k)
     obs = [_channels(s.color).astype(np.float32) for s in sources]
     x = [_channels(u.color).astype(np.float32) for u in upsampled]
-    links = [_Link(upsampled[i], upsampled[1 - i], k, weight) for i in (0, 1)]  # links[i]: i's subsamples in the other
+    links = [_Link(upsampled[i], upsampled[1 - i], k, weight, x[0].shape[2]) for i in (0, 1)]  # i's subsamples in the other
     for _ in range(iterations):
         steps = [_pair_step(xi, obs[i], x[1 - i], obs[1 - i], links[i], links[1 - i], k) for i, xi in enumerate(x)]
         for xi, step in zip(x, steps):
@@ -143,21 +143,19 @@ class _Link:
     the other sees (its depth there within :data:`SAME_SURFACE_REL`), and the shares of the own
     and the other's residual in their steps (the other's ``weight`` where it sees them)."""
 
-    def __init__(self, this: View, other: View, k: int, weight: float):
+    def __init__(self, this: View, other: View, k: int, weight: float, channels: int):
         h, w = this.depth.shape
-        v, u = np.mgrid[0:h, 0:w].astype(np.float64)
-        with np.errstate(invalid="ignore"):
-            uv, z = other.camera.project(this.camera.unproject(np.stack([u, v], -1), this.depth))
-        mu = np.nan_to_num(uv[..., 0], nan=-1e6).astype(np.float32)
-        mv = np.nan_to_num(uv[..., 1], nan=-1e6).astype(np.float32)
+        mu, mv, z = _pixels_in(this, other)
         z_other = cv2.remap(np.asarray(other.depth, np.float32), mu, mv, cv2.INTER_NEAREST,
                             borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
         with np.errstate(invalid="ignore"):
-            self.seen = (np.abs(z_other - z) <= SAME_SURFACE_REL * z)[..., None]  # (k H, k W, 1)
+            seen = (np.abs(z_other - z) <= SAME_SURFACE_REL * z).astype(np.float32)  # (k H, k W)
         self.maps = cv2.convertMaps(mu, mv, cv2.CV_16SC2)  # fixed point: remaps twice as fast
-        self.pixel_seen = (_box(self.seen.astype(np.float32), k) > 0).reshape(h // k, w // k, 1)  # in part
-        self.own_share = (1.0 / (1.0 + weight * self.seen)).astype(np.float32)
-        self.other_share = (1.0 - self.own_share).astype(np.float32)
+        self.pixel_seen = (_box(seen, k) > 0).reshape(h // k, w // k, 1)  # seen in part
+        # per channel: numpy's products broadcast over a channel axis of 1 take 3x as long
+        self.seen = np.repeat(seen[..., None], channels, axis=2)
+        self.own_share = 1.0 / (1.0 + np.float32(weight) * self.seen)
+        self.other_share = 1.0 - self.own_share
 
     def sample(self, image: np.ndarray) -> np.ndarray:
         """``image`` (the other's upsampled grid) read at this source's subsamples."""
@@ -169,15 +167,36 @@ def _pair_step(x, obs, x_other, obs_other, link, link_other, k):
     weighted (:class:`_Link`). The other's pixels as this source explains them: their
     subsamples this source sees read in its image, the others the other's own (a pixel the
     other sees beside a silhouette that hides part of it from this source still tells)."""
-    own = _spread(obs - _box(x, k), k, cv2.INTER_LINEAR)
-    explained = np.where(link_other.seen, link_other.sample(x), x_other)
+    explained = link_other.sample(x)
+    explained -= x_other
+    explained *= link_other.seen
+    explained += x_other
     residual = obs_other - _box(explained, k)
     residual *= link_other.pixel_seen
     back = link.sample(_spread(residual, k, cv2.INTER_LINEAR))
-    own *= link.own_share
     back *= link.other_share
+    own = _spread(obs - _box(x, k), k, cv2.INTER_LINEAR)
+    own *= link.own_share
     own += back
     return own
+
+
+def _pixels_in(this: View, other: View):
+    """(map_u, map_v, z): where each pixel of ``this`` lands in ``other`` (float32 pixel
+    coordinates; far outside where its depth is unknown or it lies behind ``other``) and its
+    planar depth there."""
+    h, w = this.depth.shape
+    cam = this.camera
+    z = np.asarray(this.depth, np.float32)
+    x = ((np.arange(w, dtype=np.float32) - np.float32(cam.cx)) / np.float32(cam.fx))[None, :] * z
+    y = ((np.arange(h, dtype=np.float32) - np.float32(cam.cy)) / np.float32(cam.fy))[:, None] * z
+    m = (other.camera.cam_from_world @ cam.world_from_cam).astype(np.float32)  # this camera -> other's
+    px, py, pz = (m[i, 0] * x + m[i, 1] * y + m[i, 2] * z + m[i, 3] for i in range(3))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.where(pz > 0, np.float32(1.0) / pz, np.nan)
+        mu = np.nan_to_num(np.float32(other.camera.fx) * px * inv + np.float32(other.camera.cx), nan=-1e6)
+        mv = np.nan_to_num(np.float32(other.camera.fy) * py * inv + np.float32(other.camera.cy), nan=-1e6)
+    return mu.astype(np.float32), mv.astype(np.float32), pz
 
 
 def _box(x: np.ndarray, k: int) -> np.ndarray:
@@ -211,13 +230,19 @@ def _consistent(x: np.ndarray, s: np.ndarray, k: int, limits) -> np.ndarray:
     if limits is None:
         return x
     np.clip(x, *limits, out=x)
-    r = _spread(s - _box(x, k), k, cv2.INTER_NEAREST)
-    room = np.where(r > 0, limits[1] - x, x - limits[0])
-    total = _spread(_box(room, k), k, cv2.INTER_NEAREST)  # the pixel's mean room
-    with np.errstate(divide="ignore", invalid="ignore"):
-        step = np.where(total > 0, r * room / total, 0.0)
-    x += step
-    return np.clip(x, *limits, out=x)
+    r = s - _box(x, k)
+    ys, xs = np.nonzero(np.abs(r).max(axis=2) > 1e-4)  # the pixels clipping moved (few)
+    if ys.size:
+        h, w, c = s.shape
+        blocks = x.reshape(h, k, w, k, c)
+        b = blocks[ys, :, xs]  # (n, k, k, C)
+        rb = r[ys, xs][:, None, None, :]
+        room = np.where(rb > 0, limits[1] - b, b - limits[0])
+        total = room.mean(axis=(1, 2), keepdims=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(total > 0, rb * room / total, 0.0)
+        blocks[ys, :, xs] = np.clip(b + step, *limits)
+    return x
 
 
 def colour_limits(dtype) -> tuple[float, float] | None:
