@@ -42,8 +42,9 @@ def add_arguments(parser) -> None:
                              "softer textures; cubic: bicubic, ~3x the frame time)")
     parser.add_argument("--supersample", type=number_in(1, 5, integer=True), choices=(1, 3, 5), default=1,
                         metavar="K",
-                        help="K x K subsamples per pixel from sources upsampled with sub-pixel silhouettes, "
-                             "box-filtered at depth edges (1, 3 or 5; default 1 = off; about K^2 the frame time)")
+                        help="K x K subsamples per pixel, box-filtered, from sources upsampled with sub-pixel "
+                             "silhouettes and their colours refined by each other (1, 3 or 5; default 1 = off; "
+                             "about K^2 the frame time)")
     parser.add_argument("--antialias", action="store_true",
                         help="anti-aliased silhouettes: pixels at depth edges are the mean of their centre and four "
                              "diagonal subsamples (+1.4 dB at clutter's edges for about 1.5x the frame time; "

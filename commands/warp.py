@@ -24,8 +24,8 @@ def add_arguments(parser) -> None:
                              "2x2 once; linear: plain bilinear, softer; cubic: bicubic, ~3x the frame time)")
     parser.add_argument("--supersample", type=number_in(1, 5, integer=True), choices=(1, 3, 5), default=1,
                         metavar="K",
-                        help="K x K subsamples per pixel from a source upsampled with sub-pixel silhouettes, "
-                             "box-filtered at depth edges (1, 3 or 5; default 1 = off; about K^2 the time)")
+                        help="K x K subsamples per pixel, box-filtered, from a source upsampled with sub-pixel "
+                             "silhouettes (1, 3 or 5; default 1 = off; about K^2 the time)")
     parser.add_argument("--antialias", action="store_true",
                         help="anti-aliased silhouettes: pixels at depth edges are the mean of their centre and four "
                              "diagonal subsamples (+1.4 dB at clutter's edges for about 1.5x the frame time; "

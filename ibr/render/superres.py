@@ -16,7 +16,9 @@ it blurs once more. Two steps mend this:
   through their depth into this source's upsampled image (bilinear; those this source does not
   see keep the partner's own colour), their k x k mean compared with the partner's pixel, and
   that residual mapped back and averaged with the own one (:data:`PARTNER_WEIGHT`) wherever
-  both sources see the same surface (depths within :data:`SAME_SURFACE_REL`). The two cameras see each surface at other sub-pixel phases and,
+  both sources see the same surface (depths within :data:`SAME_SURFACE_REL`); a partner's
+  mixed pixel whose depth shows one surface only explains this source within
+  :data:`UNSPLIT_RESIDUAL` (else it would draw the surface its depth misses into this one). The two cameras see each surface at other sub-pixel phases and,
   next to a silhouette, the background a mixed pixel hides at other distances from the
   outline, so the partner tells what one view's mean cannot: finer texture and unmixed
   colours on both sides of silhouettes.
@@ -26,9 +28,9 @@ not only the edge pixels (:func:`~ibr.render.supersample.downsample_rendering`).
 
 Measured (``python benchmarks/bench_edges.py --quick``, ``supersample=3``, t = .25/.5/.75,
 covered pixels; edge band / all covered, dB): clutter 31.54 / 39.59 -> 31.77 band with the own
-back-projection and the box over every pixel -> **32.16 / 40.43** with the partner's (eight
+back-projection and the box over every pixel -> **32.17 / 40.47** with the partner's (eight
 iterations; 32.03 with only the partner's pixels this source sees whole); room 32.37 / 40.07 ->
-32.45 -> **33.12 / 41.50** (32.93); the motorcycle pair's one source 28.29 -> 28.30. More
+32.45 -> **33.07 / 41.49** (32.93); the motorcycle pair's one source 28.29 -> 28.30. More
 iterations sharpen the interiors further but lose at the silhouettes (20: clutter band 31.93,
 room 32.68 with all covered 42.11, before the partial pixels), so they stop at
 :data:`PAIR_ITERATIONS`; clamping the partner's residual (to 6 or 16 levels, against
@@ -41,6 +43,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ..base.depth import quantization_of
 from ..base.validate import check_array, check_number, check_positive
 from ..base.view import View
 from .supersample import check_supersample
@@ -57,6 +60,14 @@ PARTNER_WEIGHT = 0.5
 #: Relative depth difference within which a subsample and the partner's depth at its image are
 #: one surface (the blend's tolerance).
 SAME_SURFACE_REL = 0.02
+#: A partner's depth-edge pixel whose subsamples all lie on one surface (its silhouette not
+#: split inside it) may mix in a surface its depth does not show (a pole's dark limb beside a
+#: face, clutter): its residual is left out where it exceeds this share of the colour's range
+#: (24/255), so it does not draw that surface into this source. 16 / 24 / 40 / none: clutter's
+#: band 32.17 / 32.17 / 32.16 / 32.16, room's 32.98 / 33.06 / 33.10 / 33.12, the line beside
+#: clutter's left pole (t = 0.75, mean error of its worst column) 6.0 / 7.0 / 13.0 / 12.9
+#: levels (7.2 before the partner's colour).
+UNSPLIT_RESIDUAL = 24.0 / 255.0
 
 
 def back_project(color_k: np.ndarray, color: np.ndarray, k: int, iterations: int | None = None,
@@ -116,11 +127,13 @@ def super_resolve_pair(sources: tuple[View, View], upsampled: tuple[View, View],
     obs = [_channels(s.color).astype(np.float32) for s in sources]
     x = [_channels(u.color).astype(np.float32) for u in upsampled]
     links = [_Link(upsampled[i], upsampled[1 - i], k, weight, x[0].shape[2]) for i in (0, 1)]  # i's subsamples in the other
+    limits = colour_limits(upsampled[0].color.dtype)
+    unsplit_limit = np.float32(UNSPLIT_RESIDUAL * (limits[1] if limits else 1.0))
     for _ in range(iterations):
-        steps = [_pair_step(xi, obs[i], x[1 - i], obs[1 - i], links[i], links[1 - i], k) for i, xi in enumerate(x)]
+        steps = [_pair_step(xi, obs[i], x[1 - i], obs[1 - i], links[i], links[1 - i], k, unsplit_limit)
+                 for i, xi in enumerate(x)]
         for xi, step in zip(x, steps):
             xi += step
-    limits = colour_limits(upsampled[0].color.dtype)
     return tuple(as_colour(_consistent(xi, o, k, limits), u.color.dtype, u.color.shape)
                  for xi, o, u in zip(x, obs, upsampled))
 
@@ -152,6 +165,7 @@ class _Link:
             seen = (np.abs(z_other - z) <= SAME_SURFACE_REL * z).astype(np.float32)  # (k H, k W)
         self.maps = cv2.convertMaps(mu, mv, cv2.CV_16SC2)  # fixed point: remaps twice as fast
         self.pixel_seen = (_box(seen, k) > 0).reshape(h // k, w // k, 1)  # seen in part
+        self.unsplit_edge = _unsplit_edge_pixels(this, k)[..., None]
         # per channel: numpy's products broadcast over a channel axis of 1 take 3x as long
         self.seen = np.repeat(seen[..., None], channels, axis=2)
         self.own_share = 1.0 / (1.0 + np.float32(weight) * self.seen)
@@ -162,7 +176,7 @@ class _Link:
         return _remap(image, self.maps)
 
 
-def _pair_step(x, obs, x_other, obs_other, link, link_other, k):
+def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit):
     """The step of one source: its own residual and, where the other sees it, the other's,
     weighted (:class:`_Link`). The other's pixels as this source explains them: their
     subsamples this source sees read in its image, the others the other's own (a pixel the
@@ -173,12 +187,26 @@ def _pair_step(x, obs, x_other, obs_other, link, link_other, k):
     explained += x_other
     residual = obs_other - _box(explained, k)
     residual *= link_other.pixel_seen
+    residual *= ~(link_other.unsplit_edge & (np.abs(residual).max(axis=2, keepdims=True) > unsplit_limit))
     back = link.sample(_spread(residual, k, cv2.INTER_LINEAR))
     back *= link.other_share
     own = _spread(obs - _box(x, k), k, cv2.INTER_LINEAR)
     own *= link.own_share
     own += back
     return own
+
+
+def _unsplit_edge_pixels(view: View, k: int) -> np.ndarray:
+    """(H, W) bool: the depth-edge pixels (:func:`~ibr.render.upsample.depth_edge_pixels` of the
+    centre subsamples) of an upsampled view whose k x k subsamples all lie within
+    :data:`SAME_SURFACE_REL` of each other."""
+    from .upsample import depth_edge_pixels
+
+    z = np.asarray(view.depth, np.float32)
+    planes = [z[i::k, j::k] for i in range(k) for j in range(k)]
+    with np.errstate(invalid="ignore"):
+        one_surface = np.fmax.reduce(planes) <= np.fmin.reduce(planes) * (1 + SAME_SURFACE_REL)
+    return depth_edge_pixels(planes[len(planes) // 2], quantization=quantization_of(view)) & one_surface
 
 
 def _pixels_in(this: View, other: View):

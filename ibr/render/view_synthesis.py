@@ -154,18 +154,19 @@ class _Source:
             for key in [k for k in cache if _holds_dead_ref(k)]:
                 del cache[key]
 
-    def upsampled(self, k: int, refined_key=None) -> View:
-        """The source at k x k its resolution with sub-pixel silhouettes
-        (:func:`~ibr.render.upsample.upsample_view`), made once per factor (and partner); its meshes are
-        cached on it like any view's. With ``refined_key`` (the options of a mesh of this source
-        refined against its partner, :func:`_with_partners`) it is upsampled from that mesh's
-        depth instead of its stored codes (:func:`_upsampled_pair`)."""
-        v = self._upsampled.get((k, refined_key))
+    def upsampled(self, k: int) -> View:
+        """The source alone at k x k its resolution with sub-pixel silhouettes and back-projected
+        colour (:func:`~ibr.render.upsample.upsample_view`; :func:`warp`), made once per factor;
+        its meshes are cached on it like any view's."""
+        v = self._upsampled.get(k)
         if v is None:
-            v = self._upsampled[(k, refined_key)] = self._upsample(k, refined_key)
+            v = self._upsampled[k] = self._upsample(k)
         return set_quantization(v, quantization_of(self._view()))  # as the view's is now (it may have been set since)
 
     def _upsample(self, k: int, refined_key=None) -> View:
+        """:func:`~ibr.render.upsample.upsample_view` of the source, or with ``refined_key`` (the
+        options of a mesh of this source refined against its partner, :func:`_with_partners`) of
+        the source with that mesh's depth instead of its stored codes (:func:`_upsampled_pair`)."""
         from .upsample import upsample_view
 
         view = self._view()
@@ -173,15 +174,16 @@ class _Source:
         return upsample_view(source, k)
 
     def upsampled_with(self, partner: View, k: int, refined_key=None, partner_key=None) -> View:
-        """The source at k x k as :meth:`upsampled`, its colour refined together with
-        ``partner``'s (:func:`~ibr.render.superres.super_resolve_pair`); made once per pair
-        (the partner's is cached on it)."""
+        """The source at k x k as :meth:`_upsample`, its colour refined together with
+        ``partner``'s (:func:`~ibr.render.superres.super_resolve_pair`); made once per pair and
+        factor (the partner's is cached on it, and both are dropped with either view)."""
         from .superres import super_resolve_pair
 
         view, other = self._view(), _source(partner)
+        self.drop_dead_partners()  # a few keys: the views refined with a partner gone go at once
+        other.drop_dead_partners()
         key, key_other = (k, refined_key, weakref.ref(partner), partner_key), (k, partner_key, self._view, refined_key)
         if key not in self._upsampled or key_other not in other._upsampled:
-            self.drop_dead_partners()
             ups = (self._upsample(k, refined_key), other._upsample(k, partner_key))
             colours = super_resolve_pair((view, partner), ups, k)
             self._upsampled[key], other._upsampled[key_other] = (View(c, u.depth, u.camera, u.name)
@@ -738,10 +740,11 @@ def warp(
         ``baseline`` nor ``threshold``: the actual move from the source to ``camera``
         (default, :func:`lod_baseline`), or 5 % of the median depth (issue 4's default).
     supersample : {1, 3, 5}
-        Upsample the source k x k with its silhouettes placed inside the mixed pixels
-        (:mod:`ibr.render.upsample`), render k x k subsamples per pixel and box-filter them at
-        depth edges (:mod:`ibr.render.supersample`): anti-aliased, sub-pixel silhouettes, about
-        k^2 the time (and a mesh of k^2 the pixels, once per source). 1: off (default).
+        Upsample the source k x k with its silhouettes placed inside the mixed pixels and its
+        colour back-projected (:mod:`ibr.render.upsample`), render k x k subsamples per pixel
+        and box-filter them (:mod:`ibr.render.supersample`): anti-aliased, sub-pixel
+        silhouettes, about k^2 the time (and a mesh of k^2 the pixels, once per source). 1: off
+        (default).
     antialias : bool
         Anti-aliased silhouettes: each covered pixel at a depth edge is the mean of its centre
         (twice) and four diagonal subsamples (:mod:`ibr.render.edge_antialias`): about 1.5x the
@@ -1014,8 +1017,9 @@ def interpolate(
         ``supersample``; with ``antialias`` in its subsamples); ``False`` is issue 4's plain
         viewpoint blend.
     supersample : {1, 3, 5}
-        As in :func:`warp`: sources upsampled with sub-pixel silhouettes, k x k subsamples per
-        pixel box-filtered at depth edges; about k^2 the frame time (the fill and the
+        As in :func:`warp`: sources upsampled with sub-pixel silhouettes, their colours refined
+        by each other (:mod:`ibr.render.superres`, once per pair: 0.7 s at 512 x 384), k x k
+        subsamples per pixel box-filtered; about k^2 the frame time (the fill and the
         previous-frame fill run on the subsamples). 1: off (default).
     antialias : bool
         As in :func:`warp`: depth-edge pixels the mean of their centre and four subsamples

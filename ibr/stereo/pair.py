@@ -301,7 +301,7 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
     supersample : {1, 3, 5}
         ``"mesh"`` only: the view upsampled k x k with sub-pixel silhouettes
         (:func:`ibr.render.upsample.upsample_view`), each eye rendered at k x k its resolution
-        and box-filtered at depth edges (:mod:`ibr.render.supersample`); about k^2 the time.
+        and box-filtered (:mod:`ibr.render.supersample`); about k^2 the time.
     interpolation : {"linear", "sharp"}
         ``"pixel"`` only: colour between two row neighbours straight from one to the other
         (default) or through their Lanczos-3 half-way sample (no tap across a depth step;
@@ -338,7 +338,7 @@ def stereo_pair(view: View, *, e: float, f: float, source: str = "center", metho
             out[eye] = (col.copy(), view.depth.copy(), np.zeros(view.shape, bool))
             continue
         c, d, cov = _render_eye(source_view, supersampled_camera(cam, k), method, max_jump_px, mesh, color32, half)
-        if k > 1:  # box mean at covered depth edges, centre subsample elsewhere; holes filled at 1x below
+        if k > 1:  # box mean wherever every subsample is covered, else the centre; holes filled at 1x below
             c, d, uncovered, _ = downsample_rendering(c, d, ~cov, np.zeros(cov.shape, bool), k)
             cov = ~uncovered
         c = np.ascontiguousarray(c[..., None] if c.ndim == 2 else c)
