@@ -167,9 +167,8 @@ class _Link:
         self.pixel_seen = (_box(seen, k) > 0).reshape(h // k, w // k, 1)  # seen in part
         self.unsplit_edge = _unsplit_edge_pixels(this, k)[..., None]
         # per channel: numpy's products broadcast over a channel axis of 1 take 3x as long
-        self.seen = np.repeat(seen[..., None], channels, axis=2)
-        self.own_share = 1.0 / (1.0 + np.float32(weight) * self.seen)
-        self.other_share = 1.0 - self.own_share
+        self.seen = np.repeat(seen[..., None] > 0, channels, axis=2)  # bool: a quarter of the memory
+        self.own_share = np.where(self.seen, np.float32(1.0 / (1.0 + weight)), np.float32(1.0))  # the other's: 1 - own
 
     def sample(self, image: np.ndarray) -> np.ndarray:
         """``image`` (the other's upsampled grid) read at this source's subsamples."""
@@ -189,8 +188,8 @@ def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit):
     residual *= link_other.pixel_seen
     residual *= ~(link_other.unsplit_edge & (np.abs(residual).max(axis=2, keepdims=True) > unsplit_limit))
     back = link.sample(_spread(residual, k, cv2.INTER_LINEAR))
-    back *= link.other_share
     own = _spread(obs - _box(x, k), k, cv2.INTER_LINEAR)
+    own -= back  # own * share + back * (1 - share), in place (frame-sized arrays at 3x: 1080p memory)
     own *= link.own_share
     own += back
     return own
