@@ -155,7 +155,9 @@ def test_a_mixed_partner_pixel_does_not_draw_a_ghost_line():
     into a face pixel whose depth is all face (pixel (60, 223) and its column). Left to explain
     source b, it drew a dark line into b's face beside the pole: the worst column right of the
     pole (rows 30-77, columns 226-231) averaged 12.9 levels off the truth (7.2 before the
-    partner's colour); with such pixels' large residuals left out, 7.0."""
+    partner's colour); with such pixels' large residuals left out 7.0, and with the upsampled
+    sources' low trust over their whole mixed 1x pixels (b's clean face wins the blend) 4.0
+    (11.2 with the trust alone)."""
     from ibr.render.view_synthesis import interpolate
 
     a, b = (load_view(DATA_DIR / f"clutter_{s}.json") for s in ("a", "b"))
@@ -163,4 +165,4 @@ def test_a_mixed_partner_pixel_does_not_draw_a_ghost_line():
     r = interpolate(a, b, truth.camera, fill="none", supersample=3)
     err = np.abs(r.color.astype(int) - truth.color.astype(int)).max(-1)[30:78, 226:232]
     assert not r.holes[30:78, 226:232].any()
-    assert err.mean(axis=0).max() < 9.0
+    assert err.mean(axis=0).max() < 5.5
