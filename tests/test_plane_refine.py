@@ -254,12 +254,12 @@ def _write_8bit_disparity_pair(folder, views, bf: float) -> list:
     return paths
 
 
-@pytest.mark.parametrize("scene, within", [("room", 0.45), ("clutter", 1.1)])
+@pytest.mark.parametrize("scene, within", [("room", 0.6), ("clutter", 1.3)])
 def test_supersampled_8bit_disparity_is_upsampled_from_the_fitted_planes(scene, within):
     """With ``supersample=3`` the sources are upsampled and meshed anew, so a source in coarse
     codes is upsampled from the depth of its fitted mesh, not from its codes: 8-bit disparity
     against the exact depth's ``supersample=3`` render (t = .25/.5/.75, covered pixels), measured
-    room -0.29 dB and clutter -0.90 (from the codes: -0.95 / -1.50). The gaps grew with the
+    room -0.35 dB and clutter -1.01 (from the codes: -1.17 / -1.67). The gaps grew with the
     two-source super-resolution (-0.10 / -0.43 before), which the exact depth's registration
     gains more from: the 8-bit renders themselves rose (clutter 39.02 -> 39.62 dB)."""
     a, b, codes, q, cams, psnr = _bundled_pair_in_8bit_disparity(scene)

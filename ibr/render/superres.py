@@ -28,12 +28,13 @@ not only the edge pixels (:func:`~ibr.render.supersample.downsample_rendering`).
 
 Measured (``python benchmarks/bench_edges.py --quick``, ``supersample=3``, t = .25/.5/.75,
 covered pixels; edge band / all covered, dB): clutter 31.54 / 39.59 -> 31.77 band with the own
-back-projection and the box over every pixel -> **32.17 / 40.47** with the partner's (eight
+back-projection and the box over every pixel -> 32.17 / 40.47 with the partner's (eight
 iterations; 32.03 with only the partner's pixels this source sees whole); room 32.37 / 40.07 ->
-32.45 -> **33.07 / 41.49** (32.93); the motorcycle pair's one source 28.29 -> 28.30. More
-iterations sharpen the interiors further but lose at the silhouettes (20: clutter band 31.93,
-room 32.68 with all covered 42.11, before the partial pixels), so they stop at
-:data:`PAIR_ITERATIONS`; clamping the partner's residual (to 6 or 16 levels, against
+32.45 -> 33.07 / 41.49 (32.93); with the upsampled pair's widened trust
+(:meth:`~ibr.render.view_synthesis._Source.silhouettes`) and twelve iterations **32.27 /
+40.63** and **33.21 / 41.79**; the motorcycle pair's one source 28.29 -> 28.30. Before the
+partial and unsplit pixels more iterations lost at the silhouettes (20: clutter band 31.93,
+room 32.68 with all covered 42.11), so they stop at :data:`PAIR_ITERATIONS`; clamping the partner's residual (to 6 or 16 levels, against
 misregistration) changed nothing but lowered room at 6; a partial pixel's residual scaled by
 the share this source sees: +0.01 dB.
 """
@@ -53,8 +54,11 @@ __all__ = ["BACK_PROJECTIONS", "PAIR_ITERATIONS", "PARTNER_WEIGHT", "back_projec
 #: Bilinear back-projection steps of a single source (then one even step). 1, 3 and 8 gave the
 #: same band (clutter 31.76 / 31.77 / 31.76 dB without the partner; 60 ms per source at 3).
 BACK_PROJECTIONS = 1
-#: Iterations of the two-source back-projection.
-PAIR_ITERATIONS = 8
+#: Iterations of the two-source back-projection. 8 / 12 / 16 (with the unsplit rule and the
+#: upsampled pair's widened trust): band clutter 32.23 / 32.27 / 32.28, room 33.15 / 33.21 /
+#: 33.23 dB, room's covered off-band pixels over 48/255 5, 5, 0 / 5, 2, 0 / 5, 1, 0, the ghost
+#: line beside clutter's left pole 4.0 / 4.6 / 5.3 levels; about 40 ms each at 512 x 384.
+PAIR_ITERATIONS = 12
 #: Weight of the partner's residual against the source's own (1).
 PARTNER_WEIGHT = 0.5
 #: Relative depth difference within which a subsample and the partner's depth at its image are
