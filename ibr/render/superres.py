@@ -18,10 +18,10 @@ it blurs once more. Two steps mend this:
   that residual mapped back and averaged with the own one (:data:`PARTNER_WEIGHT`) wherever
   both sources see the same surface (depths within :data:`SAME_SURFACE_REL`); a partner's
   mixed pixel whose depth shows one surface only explains this source within
-  :data:`UNSPLIT_RESIDUAL` (else it would draw the surface its depth misses into this one). The two cameras see each surface at other sub-pixel phases and,
-  next to a silhouette, the background a mixed pixel hides at other distances from the
-  outline, so the partner tells what one view's mean cannot: finer texture and unmixed
-  colours on both sides of silhouettes.
+  :data:`UNSPLIT_RESIDUAL` (else it would draw the surface its depth misses into this one).
+  The two cameras see each surface at other sub-pixel phases and, next to a silhouette, the
+  background a mixed pixel hides at other distances from the outline, so the partner tells
+  what one view's mean cannot: finer texture and unmixed colours on both sides of silhouettes.
 
 Since the sources are then box-consistent, the supersampled renderer box-filters every pixel,
 not only the edge pixels (:func:`~ibr.render.supersample.downsample_rendering`).
@@ -34,8 +34,9 @@ iterations; 32.03 with only the partner's pixels this source sees whole); room 3
 (:meth:`~ibr.render.view_synthesis._Source.silhouettes`) and twelve iterations **32.27 /
 40.63** and **33.21 / 41.79**; the motorcycle pair's one source 28.29 -> 28.30. Before the
 partial and unsplit pixels more iterations lost at the silhouettes (20: clutter band 31.93,
-room 32.68 with all covered 42.11), so they stop at :data:`PAIR_ITERATIONS`; clamping the partner's residual (to 6 or 16 levels, against
-misregistration) changed nothing but lowered room at 6; a partial pixel's residual scaled by
+room 32.68 with all covered 42.11), so they stop at :data:`PAIR_ITERATIONS`; clamping the
+partner's residual (to 6 or 16 levels, against misregistration) changed nothing but lowered
+room at 6; a partial pixel's residual scaled by
 the share this source sees: +0.01 dB.
 """
 
@@ -92,7 +93,7 @@ def back_project(color_k: np.ndarray, color: np.ndarray, k: int, iterations: int
         The colour's range (an integer dtype's): the subsamples are kept inside it, and what
         clipping takes from a pixel's mean goes to its other subsamples (:func:`_consistent`).
     """
-    iterations = BACK_PROJECTIONS if iterations is None else check_number("iterations", iterations, integer=True, minimum=0)
+    iterations = BACK_PROJECTIONS if iterations is None else _check_iterations(iterations)
     k = check_supersample(k)
     if limits is not None and not (np.ndim(limits) == 1 and len(limits) == 2 and limits[0] < limits[1]):
         raise ValueError(f"limits: expected (low, high) with low < high, got {limits!r}")
@@ -124,13 +125,14 @@ def super_resolve_pair(sources: tuple[View, View], upsampled: tuple[View, View],
     -------
     (color_a, color_b) : arrays of the upsampled colours' shape and dtype
     """
-    iterations = PAIR_ITERATIONS if iterations is None else check_number("iterations", iterations, integer=True, minimum=0)
+    iterations = PAIR_ITERATIONS if iterations is None else _check_iterations(iterations)
     weight = PARTNER_WEIGHT if weight is None else check_positive("weight", weight)
     k = check_supersample(k)
     _check_views(sources, upsampled, k)
     obs = [_channels(s.color).astype(np.float32) for s in sources]
     x = [_channels(u.color).astype(np.float32) for u in upsampled]
-    links = [_Link(upsampled[i], upsampled[1 - i], k, weight, x[0].shape[2]) for i in (0, 1)]  # i's subsamples in the other
+    channels = x[0].shape[2]
+    links = [_Link(upsampled[i], upsampled[1 - i], k, weight, channels) for i in (0, 1)]  # i's subsamples in the other
     limits = colour_limits(upsampled[0].color.dtype)
     unsplit_limit = np.float32(UNSPLIT_RESIDUAL * (limits[1] if limits else 1.0))
     for _ in range(iterations):
@@ -140,6 +142,10 @@ def super_resolve_pair(sources: tuple[View, View], upsampled: tuple[View, View],
             xi += step
     return tuple(as_colour(_consistent(xi, o, k, limits), u.color.dtype, u.color.shape)
                  for xi, o, u in zip(x, obs, upsampled))
+
+
+def _check_iterations(iterations) -> int:
+    return check_number("iterations", iterations, integer=True, minimum=0)
 
 
 def _check_views(sources, upsampled, k: int) -> None:
