@@ -33,7 +33,9 @@ viewpoint blend), ``fill="background"`` (directional fill of rows and columns), 
    rounded to integers: its planes against the float ground truth, on the codes and fitted.
 4. Time of the 512x512 two-source frame with cached meshes (issue target <= 8 ms), before and
    after options, back to back; and of the quality options (``supersample=3``, bicubic colour)
-   against the default. Sections 1 and 2 score those options too.
+   against the default; and the first frame of fresh views, ``supersample=3`` against the
+   default, with the part the sources' upsampling and colour refinement take. Sections 1 and 2
+   score those options too.
 
 Writes ``benchmarks/results/edges_motorcycle_fill.png``, ``edges_clutter_silhouette.png`` and
 ``edges_8bit_wall.png`` (copied to ``docs/img/`` by a full run).
@@ -395,6 +397,25 @@ def section_timing(repeats):
         ms, ratio = paired_ms(lambda: interpolate(a, b, cam, fill="none", **kw),
                               lambda: interpolate(a, b, cam, fill="none", **AFTER), repeats)
         print(f"   {label}: {ms:.2f} ms (x{ratio:.2f} of the default, back to back)")
+    _first_frames(a, b, cam, max(3, repeats // 3))
+
+
+def _first_frames(a, b, cam, repeats):
+    """The first frame of fresh views (everything cached per view built anew), default against
+    ``supersample=3``, and how much of the latter is the sources' upsampling and colour refinement
+    (``ibr.render.superres``)."""
+    from ibr.base.view import View
+    from ibr.render.view_synthesis import _upsampled_pair
+
+    def fresh():
+        return View(a.color, a.depth, a.camera, a.name), View(b.color, b.depth, b.camera, b.name)
+
+    ms, ratio = paired_ms(lambda: interpolate(*fresh(), cam, fill="none", **SUPERSAMPLED),
+                          lambda: interpolate(*fresh(), cam, fill="none", **AFTER), repeats)
+    ms_up, ratio_up = paired_ms(lambda: _upsampled_pair(*fresh(), {}, "move", "mesh", 3),
+                                lambda: interpolate(*fresh(), cam, fill="none", **AFTER), repeats)
+    print(f"   first frame of fresh views, supersample 3: {ms:.0f} ms (x{ratio:.1f} of the default's, back to back), "
+          f"of which the sources upsampled and refined by each other {ms_up:.0f} ms (x{ratio_up:.1f})")
 
 
 def pictures(r0, old_c, new_c, out_dir: Path):
