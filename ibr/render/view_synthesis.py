@@ -1037,7 +1037,7 @@ def interpolate(
         viewpoint blend.
     supersample : {1, 3, 5}
         As in :func:`warp`: sources upsampled with sub-pixel silhouettes, their colours refined
-        by each other (:mod:`ibr.render.superres`, once per pair: 0.7 s at 512 x 384), k x k
+        by each other (:mod:`ibr.render.superres`, once per pair: about 1 s at 512 x 384), k x k
         subsamples per pixel box-filtered; about k^2 the frame time (the fill and the
         previous-frame fill run on the subsamples). 1: off (default).
     antialias : bool
