@@ -10,7 +10,8 @@ import pytest
 
 from ibr.base.view import View
 from ibr.io import load_view
-from ibr.render.superres import _box, back_project, super_resolve_pair
+from ibr.render.superres import back_project, super_resolve_pair
+from ibr.render.supersample import _block_means
 from ibr.render.upsample import depth_edge_pixels, upsample_view
 from ibr.render.view_synthesis import warp
 from ibr.synth import make_scene, render
@@ -32,10 +33,10 @@ def test_back_projection_keeps_each_pixels_mean_and_sharpens_a_texture():
     Lanczos-4 reading they start from (measured rms 6.65 -> 2.45 levels)."""
     k, h, w = 3, 24, 32
     truth = _texture(h, w, k)
-    pixels = _box(truth, k)
+    pixels = _block_means(truth, k)
     lanczos = cv2.resize(pixels, (w * k, h * k), interpolation=cv2.INTER_LANCZOS4)
     sharp = back_project(lanczos, pixels, k)
-    assert np.abs(_box(sharp, k) - pixels).max() < 1e-3
+    assert np.abs(_block_means(sharp, k) - pixels).max() < 1e-3
 
     def rms(x):
         return float(np.sqrt(((x - truth)[6:-6, 6:-6] ** 2).mean()))  # off the border's replicated rows
@@ -52,7 +53,7 @@ def test_back_projection_stays_in_range_and_keeps_the_means():
     assert lanczos.min() < 0 or lanczos.max() > 255
     out = back_project(lanczos, pixels, k, limits=(0.0, 255.0))
     assert out.min() >= 0 and out.max() <= 255
-    assert np.abs(_box(out, k) - pixels).max() < 0.5
+    assert np.abs(_block_means(out, k) - pixels).max() < 0.5
 
 
 def test_a_supersampled_source_at_its_own_pose_gives_itself_back():
@@ -88,7 +89,7 @@ def test_the_partner_brings_both_sources_nearer_the_scene(name):
             single = np.sqrt(((u.color - exact)[where] ** 2).mean())
             refined = np.sqrt(((c - exact)[where] ** 2).mean())
             assert refined < gain * single
-        assert np.abs(_box(c.astype(np.float32), 3) - v.color).max() <= 1.0  # still its pixels' means
+        assert np.abs(_block_means(c.astype(np.float32), 3) - v.color).max() <= 1.0  # still its pixels' means
 
 
 def test_a_partner_whose_depth_disagrees_is_left_out():

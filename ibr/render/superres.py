@@ -48,7 +48,7 @@ import numpy as np
 from ..base.depth import quantization_of
 from ..base.validate import check_array, check_number, check_positive
 from ..base.view import View
-from .supersample import check_supersample
+from .supersample import _subsample_planes, _block_means, check_supersample
 
 __all__ = ["BACK_PROJECTIONS", "PAIR_ITERATIONS", "PARTNER_WEIGHT", "back_project", "super_resolve_pair"]
 
@@ -101,7 +101,7 @@ def back_project(color_k: np.ndarray, color: np.ndarray, k: int, iterations: int
     x = check_array("color_k", color_k, shape=(s.shape[0] * k, s.shape[1] * k, s.shape[2]),
                     dtype_kind="uif").astype(np.float32)
     for _ in range(iterations):
-        x = x + _spread(s - _box(x, k), k, cv2.INTER_LINEAR)
+        x = x + _spread(s - _block_means(x, k), k, cv2.INTER_LINEAR)
     return _consistent(x, s, k, limits)
 
 
@@ -133,14 +133,14 @@ def super_resolve_pair(sources: tuple[View, View], upsampled: tuple[View, View],
     x = [_channels(u.color).astype(np.float32) for u in upsampled]
     channels = x[0].shape[2]
     links = [_Link(upsampled[i], upsampled[1 - i], k, weight, channels) for i in (0, 1)]  # i's subsamples in the other
-    limits = colour_limits(upsampled[0].color.dtype)
+    limits = _colour_limits(upsampled[0].color.dtype)
     unsplit_limit = np.float32(UNSPLIT_RESIDUAL * (limits[1] if limits else 1.0))
     for _ in range(iterations):
         steps = [_pair_step(xi, obs[i], x[1 - i], obs[1 - i], links[i], links[1 - i], k, unsplit_limit)
                  for i, xi in enumerate(x)]
         for xi, step in zip(x, steps):
             xi += step
-    return tuple(as_colour(_consistent(xi, o, k, limits), u.color.dtype, u.color.shape)
+    return tuple(_as_colour(_consistent(xi, o, k, limits), u.color.dtype, u.color.shape)
                  for xi, o, u in zip(x, obs, upsampled))
 
 
@@ -174,7 +174,7 @@ class _Link:
         with np.errstate(invalid="ignore"):
             seen = (np.abs(z_other - z) <= SAME_SURFACE_REL * z).astype(np.float32)  # (k H, k W)
         self.maps = cv2.convertMaps(mu, mv, cv2.CV_16SC2)  # fixed point: remaps twice as fast
-        self.pixel_seen = (_box(seen, k) > 0).reshape(h // k, w // k, 1)  # seen in part
+        self.pixel_seen = (_block_means(seen, k) > 0).reshape(h // k, w // k, 1)  # seen in part
         self.unsplit_edge = _unsplit_edge_pixels(this, k)[..., None]
         # per channel: numpy's products broadcast over a channel axis of 1 take 3x as long
         self.seen = np.repeat(seen[..., None] > 0, channels, axis=2)  # bool: a quarter of the memory
@@ -194,11 +194,11 @@ def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit):
     explained -= x_other
     explained *= link_other.seen
     explained += x_other
-    residual = obs_other - _box(explained, k)
+    residual = obs_other - _block_means(explained, k)
     residual *= link_other.pixel_seen
     residual *= ~(link_other.unsplit_edge & (np.abs(residual).max(axis=2, keepdims=True) > unsplit_limit))
     back = link.sample(_spread(residual, k, cv2.INTER_LINEAR))
-    own = _spread(obs - _box(x, k), k, cv2.INTER_LINEAR)
+    own = _spread(obs - _block_means(x, k), k, cv2.INTER_LINEAR)
     own -= back  # own * share + back * (1 - share), in place (frame-sized arrays at 3x: 1080p memory)
     own *= link.own_share
     own += back
@@ -211,8 +211,7 @@ def _unsplit_edge_pixels(view: View, k: int) -> np.ndarray:
     :data:`SAME_SURFACE_REL` of each other."""
     from .upsample import depth_edge_pixels
 
-    z = np.asarray(view.depth, np.float32)
-    planes = [z[i::k, j::k] for i in range(k) for j in range(k)]
+    planes = _subsample_planes(np.asarray(view.depth, np.float32), k)
     with np.errstate(invalid="ignore"):
         one_surface = np.fmax.reduce(planes) <= np.fmin.reduce(planes) * (1 + SAME_SURFACE_REL)
     return depth_edge_pixels(planes[len(planes) // 2], quantization=quantization_of(view)) & one_surface
@@ -236,12 +235,6 @@ def _pixels_in(this: View, other: View):
     return mu.astype(np.float32), mv.astype(np.float32), pz
 
 
-def _box(x: np.ndarray, k: int) -> np.ndarray:
-    """The k x k means of ``x`` (INTER_AREA at an integer factor is exactly the block mean)."""
-    h, w = x.shape[0] // k, x.shape[1] // k
-    return _channels(cv2.resize(x, (w, h), interpolation=cv2.INTER_AREA), x)
-
-
 def _spread(r: np.ndarray, k: int, interpolation: int) -> np.ndarray:
     """``r`` upsampled k x k (pixel centres aligned)."""
     return _channels(cv2.resize(r, (r.shape[1] * k, r.shape[0] * k), interpolation=interpolation), r)
@@ -263,11 +256,11 @@ def _consistent(x: np.ndarray, s: np.ndarray, k: int, limits) -> np.ndarray:
     within ``limits``, what clipping then takes from a pixel's mean goes to its subsamples in
     proportion to their room to the limit it moves away from (exact where ``s`` lies within
     ``limits``)."""
-    x = x + _spread(s - _box(x, k), k, cv2.INTER_NEAREST)
+    x = x + _spread(s - _block_means(x, k), k, cv2.INTER_NEAREST)
     if limits is None:
         return x
     np.clip(x, *limits, out=x)
-    r = s - _box(x, k)
+    r = s - _block_means(x, k)
     ys, xs = np.nonzero(np.abs(r).max(axis=2) > 1e-4)  # the pixels clipping moved (few)
     if ys.size:
         h, w, c = s.shape
@@ -282,12 +275,12 @@ def _consistent(x: np.ndarray, s: np.ndarray, k: int, limits) -> np.ndarray:
     return x
 
 
-def colour_limits(dtype) -> tuple[float, float] | None:
+def _colour_limits(dtype) -> tuple[float, float] | None:
     """(0, the largest value) of an integer colour dtype; None for floats (unbounded)."""
     return (0.0, float(np.iinfo(dtype).max)) if np.issubdtype(dtype, np.integer) else None
 
 
-def as_colour(x: np.ndarray, dtype, shape) -> np.ndarray:
+def _as_colour(x: np.ndarray, dtype, shape) -> np.ndarray:
     """``x`` as a colour array of ``dtype`` and ``shape`` (integers rounded and clipped to their
     range)."""
     if np.issubdtype(dtype, np.integer):

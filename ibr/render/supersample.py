@@ -64,6 +64,14 @@ def _check_multiple(shape, k: int) -> None:
         raise ValueError(f"supersampled arrays: expected a shape of multiples of k = {k}, got {tuple(shape)}")
 
 
+def _block_means(x: np.ndarray, k: int) -> np.ndarray:
+    """(H, W[, C]) float32: the k x k block means of a (k H, k W[, C]) array (OpenCV's area
+    resampling, exact at an integer factor; a single channel axis is kept)."""
+    x = np.asarray(x, np.float32)
+    out = cv2.resize(x, (x.shape[1] // k, x.shape[0] // k), interpolation=cv2.INTER_AREA)
+    return out[..., None] if out.ndim < x.ndim else out
+
+
 def _subsample_planes(a: np.ndarray, k: int) -> list:
     """The k^2 (H, W) views ``a[i::k, j::k]`` of a (k H, k W) array: subsample (i, j) of every
     pixel."""
@@ -109,7 +117,7 @@ def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int):
     whole = functools.reduce(np.logical_and, _subsample_planes(~np.asarray(holes_k, bool) | filled_k, k))
     # the block means by OpenCV's area resampling (exact at an integer factor; a gather of every
     # pixel's block took twice the frame)
-    mean = cv2.resize(np.asarray(color_k, np.float32), (color.shape[1], color.shape[0]), interpolation=cv2.INTER_AREA)
+    mean = _block_means(color_k, k)
     if np.issubdtype(color.dtype, np.integer):
         mean = np.rint(mean)
     mean = mean.astype(color.dtype).reshape(color.shape)

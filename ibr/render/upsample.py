@@ -122,13 +122,13 @@ def upsample_view(view: View, k: int) -> View:
 def _consistent_colour(color: np.ndarray, k: int) -> np.ndarray:
     """``color`` at k x k: Lanczos-4, then back-projected until each pixel's k x k mean is its
     colour (:func:`~ibr.render.superres.back_project`), in ``color``'s dtype and layout."""
-    from .superres import as_colour, back_project, colour_limits
+    from .superres import _as_colour, _colour_limits, back_project
 
     c = np.asarray(color)
     h, w = c.shape[:2]
     lanczos = cv2.resize(c, (w * k, h * k), interpolation=cv2.INTER_LANCZOS4)
-    up = back_project(lanczos.reshape(h * k, w * k, -1), c.reshape(h, w, -1), k, limits=colour_limits(c.dtype))
-    return as_colour(up, c.dtype, (h * k, w * k) + c.shape[2:])
+    up = back_project(lanczos.reshape(h * k, w * k, -1), c.reshape(h, w, -1), k, limits=_colour_limits(c.dtype))
+    return _as_colour(up, c.dtype, (h * k, w * k) + c.shape[2:])
 
 
 def _unit_color(color: np.ndarray) -> np.ndarray:
