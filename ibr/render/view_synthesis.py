@@ -136,7 +136,7 @@ class _Source:
         self._upsampled: dict = {}
         self._lone = None
         #: an upsampled source's mixed pixels span its 1x pixel: its k x k subsamples, not only the
-        #: one beside the step (:meth:`silhouettes`; set by :meth:`upsampled_with`)
+        #: one beside the step (:meth:`silhouettes`; :func:`_with_mixed_radius`)
         self.mixed_radius = 0
 
     @property
@@ -163,7 +163,7 @@ class _Source:
         its meshes are cached on it like any view's."""
         v = self._upsampled.get(k)
         if v is None:
-            v = self._upsampled[k] = self._upsample(k)
+            v = self._upsampled[k] = _with_mixed_radius(self._upsample(k), k)
         return set_quantization(v, quantization_of(self._view()))  # as the view's is now (it may have been set since)
 
     def _upsample(self, k: int, refined_key=None) -> View:
@@ -189,10 +189,8 @@ class _Source:
         if key not in self._upsampled or key_other not in other._upsampled:
             ups = (self._upsample(k, refined_key), other._upsample(k, partner_key))
             colours = super_resolve_pair((view, partner), ups, k)
-            self._upsampled[key], other._upsampled[key_other] = (View(c, u.depth, u.camera, u.name)
-                                                                 for c, u in zip(colours, ups))
-            for v in (self._upsampled[key], other._upsampled[key_other]):
-                _source(v).mixed_radius = k - 1
+            refined = [_with_mixed_radius(View(c, u.depth, u.camera, u.name), k) for c, u in zip(colours, ups)]
+            self._upsampled[key], other._upsampled[key_other] = refined
         return set_quantization(self._upsampled[key], quantization_of(view))
 
     def trust(self, mesh_key) -> np.ndarray:
@@ -347,6 +345,13 @@ def source_mesh(view: View, **mesh_options):
 #: the source's depth is coarsely quantized, and its mesh's large quads are fitted to the other's
 #: colour (:mod:`ibr.render.plane_refine`).
 _PARTNER = "partner view (internal)"
+
+
+def _with_mixed_radius(view: View, k: int) -> View:
+    """``view``, a source upsampled k x k, with its mixed pixels to be widened by k - 1
+    subsamples (:attr:`_Source.mixed_radius`)."""
+    _source(view).mixed_radius = k - 1
+    return view
 
 
 def _widened(mask: np.ndarray, radius: int) -> np.ndarray:
