@@ -26,13 +26,22 @@ it blurs once more. Two steps mend this:
 Since the sources are then box-consistent, the supersampled renderer box-filters every pixel,
 not only the edge pixels (:func:`~ibr.render.supersample.downsample_rendering`).
 
+Twentieth session: each iteration's step is longer (:data:`PAIR_STEP`, over-relaxed) and, at
+the subsamples of the source's depth-edge pixels and a little around them, adds a total-variation
+step (:data:`EDGE_TV_WEIGHT`): a mixed pixel holds two surfaces, each flat up to its silhouette,
+where the back-projection leaves a ramp. With the upsampled sources' depth-edge subsamples
+started from their own surface (:func:`~ibr.render.upsample.upsample_view`) the band went
+clutter 32.27 -> 32.53, room 33.21 -> 33.44 dB (all covered 40.63 -> 40.92, 41.79 -> 42.10);
+:data:`UNSPLIT_RESIDUAL` went from 24/255 to 20/255 with them.
+
 Measured (``python benchmarks/bench_edges.py --quick``, ``supersample=3``, t = .25/.5/.75,
 covered pixels; edge band / all covered, dB): clutter 31.54 / 39.59 -> 31.77 band with the own
 back-projection and the box over every pixel -> 32.17 / 40.47 with the partner's (eight
 iterations; 32.03 with only the partner's pixels this source sees whole); room 32.37 / 40.07 ->
 32.45 -> 33.07 / 41.49 (32.93); with the upsampled pair's widened trust
-(:meth:`~ibr.render.view_synthesis._Source.silhouettes`) and twelve iterations **32.27 /
-40.63** and **33.21 / 41.79**; the motorcycle pair's one source 28.29 -> 28.30. Before the
+(:meth:`~ibr.render.view_synthesis._Source.silhouettes`) and twelve iterations 32.27 /
+40.63 and 33.21 / 41.79; the motorcycle pair's one source 28.29 -> 28.30 (28.28 with the
+twentieth session's start). Before the
 partial and unsplit pixels more iterations lost at the silhouettes (20: clutter band 31.93,
 room 32.68 with all covered 42.11), so they stop at :data:`PAIR_ITERATIONS`; clamping the
 partner's residual (to 6 or 16 levels, against misregistration) changed nothing but lowered
@@ -60,19 +69,39 @@ BACK_PROJECTIONS = 1
 #: 33.23 dB, room's covered off-band pixels over 48/255 5, 5, 0 / 5, 2, 0 / 5, 1, 0, the ghost
 #: line beside clutter's left pole 4.0 / 4.6 / 5.3 levels; about 40 ms each at 512 x 384.
 PAIR_ITERATIONS = 12
+#: Step length of each iteration (over-relaxation: 1 is the plain back-projection; 2 is the edge
+#: of stability, 3 diverges). 1 / 1.6 (with the edge total variation): band clutter 32.47 /
+#: 32.52, room 33.41 / 33.50 dB, all covered 40.82 / 40.90 and 41.81 / 42.11; 24 iterations of
+#: step 1 took room to 33.52 / 42.21 at twice the time, 48 to 33.57 / 42.32.
+PAIR_STEP = 1.6
 #: Weight of the partner's residual against the source's own (1).
 PARTNER_WEIGHT = 0.5
+#: Total-variation step (levels of the colour's range per iteration, :func:`_tv_descent`) at the
+#: subsamples of the source's depth-edge pixels and within :data:`EDGE_TV_RADIUS` pixels of them:
+#: the two surfaces a mixed pixel holds are flat on either side of its silhouette, not a ramp.
+#: 0 / 0.5 / 1 / 2 (radius 1, step 1): clutter's band 32.41 / 32.48 / 32.50 / 32.47, room's 33.35
+#: / 33.40 / 33.40 / 33.34 dB; over the whole image (2, 4 levels' epsilon) it flattened room's
+#: textures (all covered 41.79 -> 41.10).
+EDGE_TV_WEIGHT = 1.0 / 255.0
+#: Pixels around the depth-edge pixels the total variation reaches (0 / 1 / 2, step 1: clutter
+#: 32.44 / 32.50 / 32.51 dB, room 33.34 / 33.40 / 33.41; 2 / 4 with 24 iterations: 32.52 / 32.54,
+#: 33.52 / 33.55).
+EDGE_TV_RADIUS = 2
+#: Colour difference (share of the range) below which the total variation is quadratic.
+EDGE_TV_EPSILON = 4.0 / 255.0
 #: Relative depth difference within which a subsample and the partner's depth at its image are
 #: one surface (the blend's tolerance).
 SAME_SURFACE_REL = 0.02
 #: A partner's depth-edge pixel whose subsamples all lie on one surface (its silhouette not
 #: split inside it) may mix in a surface its depth does not show (a pole's dark limb beside a
 #: face, clutter): its residual is left out where it exceeds this share of the colour's range
-#: (24/255), so it does not draw that surface into this source. 16 / 24 / 40 / none: clutter's
+#: (20/255), so it does not draw that surface into this source. 16 / 24 / 40 / none: clutter's
 #: band 32.17 / 32.17 / 32.16 / 32.16, room's 32.98 / 33.06 / 33.10 / 33.12, the line beside
 #: clutter's left pole (t = 0.75, mean error of its worst column) 6.0 / 7.0 / 13.0 / 12.9
-#: levels (7.2 before the partner's colour).
-UNSPLIT_RESIDUAL = 24.0 / 255.0
+#: levels (7.2 before the partner's colour). With the longer steps (:data:`PAIR_STEP`) the
+#: line came back (24: 5.7 levels): 16 / 20 / 24 now give room 33.41 / 33.44 / 33.50 dB
+#: (clutter 32.52-32.53) and the line 3.0 / 3.7 / 5.7.
+UNSPLIT_RESIDUAL = 20.0 / 255.0
 
 
 def back_project(color_k: np.ndarray, color: np.ndarray, k: int, iterations: int | None = None,
@@ -134,11 +163,16 @@ def super_resolve_pair(sources: tuple[View, View], upsampled: tuple[View, View],
     channels = x[0].shape[2]
     links = [_Link(upsampled[i], upsampled[1 - i], k, weight, channels) for i in (0, 1)]  # i's subsamples in the other
     limits = _colour_limits(upsampled[0].color.dtype)
-    unsplit_limit = np.float32(UNSPLIT_RESIDUAL * (limits[1] if limits else 1.0))
+    scale = limits[1] if limits else 1.0
+    unsplit_limit = np.float32(UNSPLIT_RESIDUAL * scale)
+    zones = [_EdgeZone(u, k) for u in upsampled]
+    length = np.float32(PAIR_STEP)
+    tv_weight, tv_eps = np.float32(EDGE_TV_WEIGHT * scale) * length, np.float32(EDGE_TV_EPSILON * scale)
     for _ in range(iterations):
-        steps = [_pair_step(xi, obs[i], x[1 - i], obs[1 - i], links[i], links[1 - i], k, unsplit_limit)
+        steps = [_pair_step(xi, obs[i], x[1 - i], obs[1 - i], links[i], links[1 - i], k, unsplit_limit, length)
                  for i, xi in enumerate(x)]
-        for xi, step in zip(x, steps):
+        for xi, step, zone in zip(x, steps, zones):
+            step.reshape(-1, channels)[zone.at] += tv_weight * zone.tv_descent(xi, tv_eps)  # (unique indices)
             xi += step
     return tuple(_as_colour(_consistent(xi, o, k, limits), u.color.dtype, u.color.shape)
                  for xi, o, u in zip(x, obs, upsampled))
@@ -185,9 +219,9 @@ class _Link:
         return _remap(image, self.maps)
 
 
-def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit):
+def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit, length):
     """The step of one source: its own residual and, where the other sees it, the other's,
-    weighted (:class:`_Link`). The other's pixels as this source explains them: their
+    weighted (:class:`_Link`), times ``length`` (:data:`PAIR_STEP`). The other's pixels as this source explains them: their
     subsamples this source sees read in its image, the others the other's own (a pixel the
     other sees beside a silhouette that hides part of it from this source still tells)."""
     explained = link_other.sample(x)
@@ -197,24 +231,65 @@ def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit):
     residual = obs_other - _block_means(explained, k)
     residual *= link_other.pixel_seen
     residual *= ~(link_other.unsplit_edge & (np.abs(residual).max(axis=2, keepdims=True) > unsplit_limit))
+    residual *= length  # (on the pixels: a ninth of the work on the subsamples)
     back = link.sample(_spread(residual, k, cv2.INTER_LINEAR))
-    own = _spread(obs - _block_means(x, k), k, cv2.INTER_LINEAR)
+    own = _spread((obs - _block_means(x, k)) * length, k, cv2.INTER_LINEAR)
     own -= back  # own * share + back * (1 - share), in place (frame-sized arrays at 3x: 1080p memory)
     own *= link.own_share
     own += back
     return own
 
 
+class _EdgeZone:
+    """The subsamples of an upsampled view's depth-edge pixels (:func:`_depth_edge_pixels`) and
+    of the pixels within :data:`EDGE_TV_RADIUS` of them (flat indices into its (k H, k W) grid),
+    with their neighbours' (replicated at the border), for :meth:`tv_descent`."""
+
+    def __init__(self, view: View, k: int):
+        r = 2 * EDGE_TV_RADIUS + 1
+        zone = cv2.dilate(_depth_edge_pixels(view, k)[0].view(np.uint8), np.ones((r, r), np.uint8))
+        ys, xs = np.nonzero(np.repeat(np.repeat(zone, k, 0), k, 1))
+        h, w = view.depth.shape
+        up, down = np.maximum(ys - 1, 0) * w, np.minimum(ys + 1, h - 1) * w
+        left, right = np.maximum(xs - 1, 0), np.minimum(xs + 1, w - 1)
+        row = ys * w
+        self.at = row + xs
+        self._neighbours = (row + right, down + xs, row + left, up + xs, down + left, up + right)
+
+    def tv_descent(self, x: np.ndarray, eps) -> np.ndarray:
+        """(n, C): the descent direction of the total variation of ``x`` ((k H, k W, C); each
+        channel, forward differences smoothed by ``eps``), ``div(grad x / sqrt(|grad x|^2 +
+        eps^2))``, at the zone's subsamples."""
+        flat = x.reshape(-1, x.shape[-1])
+        c = np.take(flat, self.at, axis=0)  # (3x faster than flat[self.at])
+        right, down, left, up, down_left, up_right = (np.take(flat, i, axis=0) for i in self._neighbours)
+        e2 = eps * eps
+
+        def unit(gx, gy, g):  # g / |(gx, gy)|_eps
+            return g / np.sqrt(gx * gx + gy * gy + e2)
+
+        gx, gy = right - c, down - c
+        return (unit(gx, gy, gx) - unit(c - left, down_left - left, c - left)
+                + unit(gx, gy, gy) - unit(up_right - up, c - up, c - up))
+
+
+def _depth_edge_pixels(view: View, k: int):
+    """The (H, W) bool depth-edge pixels (:func:`~ibr.render.upsample.depth_edge_pixels` of the
+    centre subsamples) of a view upsampled k x k, and its k k subsample planes."""
+    from .upsample import depth_edge_pixels
+
+    planes = _subsample_planes(np.asarray(view.depth, np.float32), k)
+    return depth_edge_pixels(planes[len(planes) // 2], quantization=quantization_of(view)), planes
+
+
 def _unsplit_edge_pixels(view: View, k: int) -> np.ndarray:
     """(H, W) bool: the depth-edge pixels (:func:`~ibr.render.upsample.depth_edge_pixels` of the
     centre subsamples) of an upsampled view whose k x k subsamples all lie within
     :data:`SAME_SURFACE_REL` of each other."""
-    from .upsample import depth_edge_pixels
-
-    planes = _subsample_planes(np.asarray(view.depth, np.float32), k)
+    edge, planes = _depth_edge_pixels(view, k)
     with np.errstate(invalid="ignore"):
         one_surface = np.fmax.reduce(planes) <= np.fmin.reduce(planes) * (1 + SAME_SURFACE_REL)
-    return depth_edge_pixels(planes[len(planes) // 2], quantization=quantization_of(view)) & one_surface
+    return edge & one_surface
 
 
 def _pixels_in(this: View, other: View):
