@@ -9,12 +9,14 @@ Edge band PSNR (bench_edges.edge_band, t = .25/.5/.75) of
    sources: the scene's exact depth at 3x with our colour, exact depth and colour (3x3
    supersampled at 3x, not refined by the partner), our depth with the exact colour, and the
    exact colour only at the source's depth-edge pixels (the renderer box-filters every pixel
-   since the nineteenth session, as the truths are made);
+   since the nineteenth session, as the truths are made); and the exact colour made true to the
+   source pixels (each pixel's residual spread over its subsamples: a super-resolution perfect
+   up to the observations), everywhere and at the edge pixels only;
 3. our upsampled sources with the exact depth where ours is within 2 % of it (what better depth
    values of the surfaces would give) or at the edge subsamples ours puts on another surface
    (what better silhouette labels would give).
 
-Usage (from the repository root): ``python benchmarks/exp_band_ceilings.py`` (about 3 minutes).
+Usage (from the repository root): ``python benchmarks/exp_band_ceilings.py`` (about 10 minutes).
 docs/edges.md section 1 ("Ceilings of the band targets") has the figures (2026-11-27).
 """
 
@@ -60,11 +62,14 @@ def perfect_sources(name, scene, truths):
     rows = {}
     # the exact colour is not refined by the partner (superres) as ours is
     as_given = mock.patch.object(superres, "super_resolve_pair", lambda sources, ups, k: tuple(u.color for u in ups))
-    for label, depth, colour in (("supersample=3, exact 3x depth", True, None),
-                                 ("supersample=3, exact 3x depth + colour", True, "all"),
-                                 ("supersample=3, our depth, exact 3x colour", False, "all"),
-                                 ("supersample=3, exact 3x colour at edge pixels only", False, "edge")):
-        with mock.patch.object(upsample, "upsample_view", _exact_upsampling(scene, depth, colour)), \
+    for label, depth, colour, consistent in (
+            ("supersample=3, exact 3x depth", True, None, False),
+            ("supersample=3, exact 3x depth + colour", True, "all", False),
+            ("supersample=3, our depth, exact 3x colour", False, "all", False),
+            ("supersample=3, exact 3x colour at edge pixels only", False, "edge", False),
+            ("supersample=3, our depth, exact colour true to the pixels", False, "all", True),
+            ("supersample=3, exact colour true to the pixels, edge pixels", False, "edge", True)):
+        with mock.patch.object(upsample, "upsample_view", _exact_upsampling(scene, depth, colour, consistent)), \
                 (as_given if colour else contextlib.nullcontext()):
             a, b, _ = be.load_pair(name)  # fresh views: nothing cached
             frames = interpolate(a, b, cams, fill="none", supersample=3)
@@ -80,10 +85,14 @@ def perfect_sources(name, scene, truths):
     return rows
 
 
-def _exact_upsampling(scene, depth: bool, colour: str | None):
+def _exact_upsampling(scene, depth: bool, colour: str | None, consistent: bool = False):
     """An ``upsample_view`` whose sources carry the scene's exact depth at k x k (``depth``) and
     its exact colour rendered with 3 x 3 samples per subsample (``colour`` = "all"; "edge": at
-    the subsamples of the source's depth-edge pixels only; None: ours)."""
+    the subsamples of the source's depth-edge pixels only; None: ours); ``consistent``: that
+    colour with each pixel's residual spread evenly so that its subsamples average to the
+    source pixel (``superres._consistent``): what a super-resolution perfect up to the source's
+    own pixels would give (the 3 x 3 rays of a source pixel and the 9 x 9 of its exact
+    subsamples differ where the texture aliases: by 3.7 levels rms at room's edge pixels)."""
     original = upsample.upsample_view
 
     def exact(view, k):
@@ -92,9 +101,13 @@ def _exact_upsampling(scene, depth: bool, colour: str | None):
                      supersample=3 if colour else 1)
         color = up.color
         if colour:
+            exact = np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype)
+            if consistent:
+                exact = superres._as_colour(superres._consistent(exact.astype(np.float32), view.color.astype(np.float32),
+                                                                 k, (0.0, 255.0)), exact.dtype, exact.shape)
             at = np.ones(up.depth.shape, bool) if colour == "all" else np.repeat(np.repeat(
                 upsample.depth_edge_pixels(view.depth), k, 0), k, 1)
-            color = np.where(at[..., None], np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype), color)
+            color = np.where(at[..., None], exact, color)
         return dataclasses.replace(up, depth=big.depth if depth else up.depth, color=color)
 
     return exact
