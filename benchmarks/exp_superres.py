@@ -5,7 +5,8 @@ For each bundled pair (clutter, room; sources at 512 x 384, 3 x 3 box-filtered),
 subsample the mean of its own 3 x 3 rays), off and on the source's depth-edge pixels:
 
 * Lanczos-4 alone (before the nineteenth session),
-* back-projected (``ibr.render.superres.back_project``: every pixel's subsamples average to it),
+* back-projected (``ibr.render.upsample.upsample_view``: the depth-edge pixels' subsamples started
+  from their own surface, then ``superres.back_project``: every pixel's subsamples average to it),
 * refined with the partner source (``super_resolve_pair``: what ``interpolate(..., supersample=3)``
   renders from).
 
