@@ -76,7 +76,7 @@ PAIR_ITERATIONS = 12
 PAIR_STEP = 1.6
 #: Weight of the partner's residual against the source's own (1).
 PARTNER_WEIGHT = 0.5
-#: Total-variation step (levels of the colour's range per iteration, :func:`_tv_descent`) at the
+#: Total-variation step (share of the colour's range per iteration, :meth:`_EdgeZone.tv_descent`) at the
 #: subsamples of the source's depth-edge pixels and within :data:`EDGE_TV_RADIUS` pixels of them:
 #: the two surfaces a mixed pixel holds are flat on either side of its silhouette, not a ramp.
 #: 0 / 0.5 / 1 / 2 (radius 1, step 1): clutter's band 32.41 / 32.48 / 32.50 / 32.47, room's 33.35
@@ -221,9 +221,10 @@ class _Link:
 
 def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit, length):
     """The step of one source: its own residual and, where the other sees it, the other's,
-    weighted (:class:`_Link`), times ``length`` (:data:`PAIR_STEP`). The other's pixels as this source explains them: their
-    subsamples this source sees read in its image, the others the other's own (a pixel the
-    other sees beside a silhouette that hides part of it from this source still tells)."""
+    weighted (:class:`_Link`), times ``length`` (:data:`PAIR_STEP`). The other's pixels as this
+    source explains them: their subsamples this source sees read in its image, the others the
+    other's own (a pixel the other sees beside a silhouette that hides part of it from this
+    source still tells)."""
     explained = link_other.sample(x)
     explained -= x_other
     explained *= link_other.seen

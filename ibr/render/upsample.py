@@ -134,10 +134,8 @@ def _consistent_colour(color: np.ndarray, k: int, depth: np.ndarray, depth_k: np
     start = cv2.resize(c.astype(np.float32), (w * k, h * k), interpolation=cv2.INTER_LANCZOS4).reshape(h * k, w * k, -1)
     py, px = np.nonzero(edge)
     if py.size:
-        values = _within_surfaces(c.reshape(h, w, -1).astype(np.float32), depth, depth_k, k, py, px)
-        for idx in range(k * k):
-            iy, ix = divmod(idx, k)
-            start[py * k + iy, px * k + ix] = values[:, idx]
+        _set_subsamples(start, py, px, k, _within_surfaces(c.reshape(h, w, -1).astype(np.float32), depth, depth_k,
+                                                           k, py, px))
     up = back_project(start, c.reshape(h, w, -1), k, limits=_colour_limits(c.dtype))
     return _as_colour(up, c.dtype, (h * k, w * k) + c.shape[2:])
 
@@ -230,11 +228,16 @@ def _place_silhouettes(depth_k: np.ndarray, depth: np.ndarray, color: np.ndarray
     # (the pixel's own on its side, the neighbourhood's extreme on the other)
     q_near = _within(_side_plane_at(planes, near, sy, sx), np.where(own_near, 1.0 / zp, 1.0 / zmin)[:, None])
     q_far = _within(_side_plane_at(planes, far, sy, sx), np.where(own_near, 1.0 / zmax, 1.0 / zp)[:, None])
-    inv = np.where(is_near, q_near, q_far)
+    _set_subsamples(depth_k, py, px, k, 1.0 / np.where(is_near, q_near, q_far))
+    return edge
+
+
+def _set_subsamples(image_k: np.ndarray, py, px, k: int, values: np.ndarray) -> None:
+    """Write ``values`` ((n, k k, ...), row-major subsamples) into the k x k subsamples of the
+    pixels ``(py, px)`` of the upsampled ``image_k``, in place."""
     for idx in range(k * k):
         iy, ix = divmod(idx, k)
-        depth_k[py * k + iy, px * k + ix] = 1.0 / inv[:, idx]
-    return edge
+        image_k[py * k + iy, px * k + ix] = values[:, idx]
 
 
 def _straight_edge_sides(alpha, own_near, near, far, sy, sx):
