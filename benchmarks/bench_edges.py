@@ -155,17 +155,17 @@ def ceilings(a, b, truths):
     return orc, ssaa, off
 
 
-def shifted_truth(truths, px):
+def shifted_truth(truths, px, axis=1):
     """What a method whose every pixel is ``px`` pixels off would score: the ground truth against
-    itself resampled (bilinear) ``px`` to the right; edge band PSNR and off-band pixels over
-    48/255, the last column left out."""
+    itself resampled (bilinear) ``px`` to the right (``axis`` = 1) or down (0); edge band PSNR
+    and off-band pixels over 48/255, the last column and row left out."""
     band, off = [], []
     for g in truths:
         h, w = g.depth.shape
-        u, v = np.meshgrid(np.arange(w, dtype=np.float32) + px, np.arange(h, dtype=np.float32))
+        u, v = np.meshgrid(np.arange(w, dtype=np.float32) + px * (axis == 1), np.arange(h, dtype=np.float32) + px * (axis == 0))
         s = cv2.remap(g.color.astype(np.float32), u, v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         bd, inside = edge_band(g.depth), np.ones((h, w), bool)
-        inside[:, -1] = False
+        inside[:, -1] = inside[-1] = False
         band.append(psnr(s, g.color, bd & inside))
         off.append(int(((np.abs(s - g.color).max(-1) > 48) & ~bd & inside).sum()))
     return band, off
@@ -199,9 +199,10 @@ def section_edges(quick):
             print(f"{name:<8} {'ceiling: oracle pick':<22} {' '.join(f'{x:.2f}' for x in orc):<24} {np.mean(orc):6.2f} "
                   f"{'':>7} {str(off):>18}")
             print(f"{name:<8} {'ceiling: 3x3 SSAA':<22} {' '.join(f'{x:.2f}' for x in ssaa):<24} {np.mean(ssaa):6.2f}")
-            for px in (0.25, 0.5):
-                band, off = shifted_truth(truths, px)
-                print(f"{name:<8} {f'truth shifted {px} px':<22} {' '.join(f'{x:.2f}' for x in band):<24} "
+            for px, axis in ((0.25, 1), (0.5, 1), (0.25, 0), (0.5, 0)):
+                band, off = shifted_truth(truths, px, axis)
+                label = f"truth {px} px {'right' if axis else 'down'}"
+                print(f"{name:<8} {label:<22} {' '.join(f'{x:.2f}' for x in band):<24} "
                       f"{np.mean(band):6.2f} {'':>7} {str(off):>18}")
 
 
