@@ -557,8 +557,9 @@ def test_cli_stereo(tmp_path):
 def test_supersampled_mesh_pairs_are_closer_to_ray_traced_eyes(name, gain):
     """Method 1 with ``supersample=3`` (view upsampled with sub-pixel silhouettes and
     back-projected colour, eyes rendered at 3x and box-filtered) against ray-traced eyes outside
-    disocclusions: measured room 41.02 -> 42.11, clutter 37.17 -> 38.10, grazing 48.57 -> 51.52
-    dB (42.19 / 37.75 / 51.17 with Lanczos colour boxed at depth edges only); same size, dtype and
+    disocclusions: measured room 41.02 -> 42.02, clutter 37.17 -> 38.73, grazing 48.57 -> 51.33
+    dB (42.11 / 38.10 / 51.52 with the depth-edge subsamples started from Lanczos colour, 42.19 /
+    37.75 / 51.17 with that colour boxed at depth edges only); same size, dtype and
     (within 1 % of the frame) the same holes."""
     scene = synth.make_scene(name)
     cam, _ = synth.scene_cameras(name, width=256, height=192)
