@@ -162,7 +162,8 @@ def shifted_truth(truths, px, axis=1):
     band, off = [], []
     for g in truths:
         h, w = g.depth.shape
-        u, v = np.meshgrid(np.arange(w, dtype=np.float32) + px * (axis == 1), np.arange(h, dtype=np.float32) + px * (axis == 0))
+        u, v = np.meshgrid(np.arange(w, dtype=np.float32) + px * (axis == 1),
+                           np.arange(h, dtype=np.float32) + px * (axis == 0))
         s = cv2.remap(g.color.astype(np.float32), u, v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         bd, inside = edge_band(g.depth), np.ones((h, w), bool)
         inside[:, -1] = inside[-1] = False

@@ -103,8 +103,8 @@ def _exact_upsampling(scene, depth: bool, colour: str | None, consistent: bool =
         if colour:
             exact = np.clip(np.rint(big.color * 255), 0, 255).astype(up.color.dtype)
             if consistent:
-                exact = superres._as_colour(superres._consistent(exact.astype(np.float32), view.color.astype(np.float32),
-                                                                 k, (0.0, 255.0)), exact.dtype, exact.shape)
+                true_to_pixels = superres._consistent(exact.astype(np.float32), view.color.astype(np.float32), k, (0.0, 255.0))
+                exact = superres._as_colour(true_to_pixels, exact.dtype, exact.shape)
             at = np.ones(up.depth.shape, bool) if colour == "all" else np.repeat(np.repeat(
                 upsample.depth_edge_pixels(view.depth), k, 0), k, 1)
             color = np.where(at[..., None], exact, color)
