@@ -159,6 +159,23 @@ def test_box_filter_on_an_analytic_edge():
     assert c[0, :, 0].tolist() == [240, 170, 35]
 
 
+@pytest.mark.parametrize("dtype, k", [(np.uint8, 3), (np.uint16, 3), (np.uint16, 5), (np.float32, 3), (np.int32, 3)])
+def test_the_box_is_the_rounded_block_mean_in_every_dtype(dtype, k):
+    """Random colour of each dtype: every pixel is its k x k subsamples' mean (float64, rounded
+    for integers), whether OpenCV's area resampling reads the colour directly (8 and 16 bit)
+    or as float32."""
+    rng = np.random.default_rng(k)
+    top = 250 if dtype is np.uint8 else 60000
+    color = rng.integers(0, top, (4 * k, 5 * k, 3)).astype(dtype)
+    depth = np.ones((4 * k, 5 * k), np.float32)
+    holes = np.zeros(depth.shape, bool)
+    c, *_ = downsample_rendering(color, depth, holes, holes, k)
+    mean = color.astype(np.float64).reshape(4, k, 5, k, 3).mean((1, 3))
+    expected = mean if dtype is np.float32 else np.rint(mean)
+    assert c.dtype == dtype
+    np.testing.assert_allclose(c.astype(np.float64), expected, atol=1e-3 if dtype is np.float32 else 0)
+
+
 def test_interpolate_supersampled_is_sharper_at_edges(clutter):
     """Clutter, fill "none", t = .25/.5/.75: the edge band (covered pixels) gains well over two
     dB and the whole covered frame over one and a half (measured 28.16 -> 31.02 and 37.07 ->

