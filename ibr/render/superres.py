@@ -198,8 +198,8 @@ def _check_views(sources, upsampled, k: int) -> None:
 class _Link:
     """Where one upsampled source's subsamples fall in the other's upsampled image, which of them
     the other does not see (``hidden``: its depth there not within :data:`SAME_SURFACE_REL`), and
-    the shares of the own
-    and the other's residual in their steps (the other's ``weight`` where it sees them)."""
+    the shares of the own and the other's residual in their steps (the other's ``weight`` where
+    it sees them)."""
 
     def __init__(self, this: View, other: View, k: int, weight: float, channels: int):
         h, w = this.depth.shape
