@@ -51,6 +51,8 @@ the share this source sees: +0.01 dB.
 
 from __future__ import annotations
 
+import functools
+
 import cv2
 import numpy as np
 
@@ -231,7 +233,7 @@ def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit, l
     np.copyto(explained, x_other, where=link_other.hidden)  # (one pass; a product with the mask took three)
     residual = obs_other - _block_means(explained, k)
     residual *= link_other.pixel_seen
-    residual *= ~(link_other.unsplit_edge & (np.abs(residual).max(axis=2, keepdims=True) > unsplit_limit))
+    residual *= ~(link_other.unsplit_edge & (_largest_channel(np.abs(residual)) > unsplit_limit))
     residual *= length  # (on the pixels: a ninth of the work on the subsamples)
     back = link.sample(_spread(residual, k, cv2.INTER_LINEAR))
     own = _spread((obs - _block_means(x, k)) * length, k, cv2.INTER_LINEAR)
@@ -239,6 +241,12 @@ def _pair_step(x, obs, x_other, obs_other, link, link_other, k, unsplit_limit, l
     own *= link.own_share
     own += back
     return own
+
+
+def _largest_channel(a: np.ndarray) -> np.ndarray:
+    """(H, W, 1): the largest of ``a``'s channels (numpy's max over a last axis of 3 took 40x as
+    long as the elementwise maxima of its channel planes)."""
+    return functools.reduce(np.maximum, [a[..., c] for c in range(a.shape[2])])[..., None]
 
 
 class _EdgeZone:
