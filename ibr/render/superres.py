@@ -345,7 +345,7 @@ def _consistent(x: np.ndarray, s: np.ndarray, k: int, limits) -> np.ndarray:
         return x
     np.clip(x, *limits, out=x)
     r = s - _block_means(x, k)
-    ys, xs = np.nonzero(np.abs(r).max(axis=2) > 1e-4)  # the pixels clipping moved (few)
+    ys, xs = np.nonzero(_largest_channel(np.abs(r))[..., 0] > 1e-4)  # the pixels clipping moved (few)
     if ys.size:
         h, w, c = s.shape
         blocks = x.reshape(h, k, w, k, c)
