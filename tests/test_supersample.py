@@ -218,6 +218,12 @@ def test_cli_interpolate_and_warp_take_supersample(tmp_path, capsys):
         out = tmp_path / f"k{k}"
         assert cli.main(["interpolate", "--t", "0.5", "--out", str(out), "--supersample", str(k)]) == 0
         scores[k] = psnr(read_image(out / "frame_000_t0.500.png"), truth)
+        err = capsys.readouterr().err  # the one-time upsampling is announced before the wait, timed after it
+        if k == 3:
+            announced, done = err.find("upsampling the sources 3 x 3"), err.find("sources upsampled 3 x 3, their colours")
+            assert 0 <= announced < done, err
+        else:
+            assert "upsampling" not in err, err
     assert scores[3] > scores[1] + 0.5, scores  # measured over the whole frame
     assert cli.main(["interpolate", "--supersample", "2"]) == 2
     assert "supersample" in capsys.readouterr().err
