@@ -419,17 +419,17 @@ def run(args) -> int:
                  f"{(time.perf_counter() - t0) * 1e3:.1f} ms (once, {'compiling' if compiling else 'loading'} the "
                  "segmentation kernels included; reused for every frame)")
 
-        if args.supersample > 1:  # seconds at 1080p: say so before the wait
+        k = args.supersample
+        if k > 1:  # seconds at 1080p: say so before the wait
             h, w = view_a.depth.shape
             guess = 1.5 * w * h / (512 * 384)  # ~1.1-1.5 s at 512 x 384, 12 s at 1440 x 1080 on two cores
-            info(f"upsampling the sources {args.supersample} x {args.supersample} and refining their colours by each "
-                 f"other (once; roughly {guess:.0f} s at {w} x {h}) ...")
+            info(f"upsampling the sources {k} x {k} and refining their colours by each other (once; roughly "
+                 f"{guess:.0f} s at {w} x {h}) ...")
         t0 = time.perf_counter()
         frames_iter = iter_interpolate(view_a, view_b, ts, method=args.method, composite_mode=args.composite,
                                        fill=args.fill, interpolation=args.interpolation,
-                                       supersample=args.supersample, antialias=args.antialias)
-        if args.supersample > 1:  # the sources were upsampled by the call (ibr.render.superres)
-            k = args.supersample
+                                       supersample=k, antialias=args.antialias)
+        if k > 1:  # the sources were upsampled by the call (ibr.render.superres)
             info(f"sources upsampled {k} x {k}, their colours refined by each other: "
                  f"{(time.perf_counter() - t0) * 1e3:.0f} ms (once)")
         long_run = len(ts) > 10

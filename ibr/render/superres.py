@@ -163,11 +163,13 @@ def super_resolve_pair(sources: tuple[View, View], upsampled: tuple[View, View],
     obs = [_channels(s.color).astype(np.float32) for s in sources]
     x = [_channels(u.color).astype(np.float32) for u in upsampled]
     channels = x[0].shape[2]
-    links = [_Link(upsampled[i], upsampled[1 - i], k, weight, channels) for i in (0, 1)]  # i's subsamples in the other
+    edges = [_depth_edge_pixels(u, k) for u in upsampled]  # (edge pixels, subsample planes): the links' and zones'
+    links = [_Link(upsampled[i], upsampled[1 - i], k, weight, channels, _unsplit_edge_pixels(*edges[i]))
+             for i in (0, 1)]  # i's subsamples in the other
     limits = _colour_limits(upsampled[0].color.dtype)
     scale = limits[1] if limits else 1.0
     unsplit_limit = np.float32(UNSPLIT_RESIDUAL * scale)
-    zones = [_EdgeZone(u, k) for u in upsampled]
+    zones = [_EdgeZone(u, k, edge) for u, (edge, _) in zip(upsampled, edges)]
     length = np.float32(PAIR_STEP)
     tv_weight, tv_eps = np.float32(EDGE_TV_WEIGHT * scale) * length, np.float32(EDGE_TV_EPSILON * scale)
     for _ in range(iterations):
@@ -201,9 +203,9 @@ class _Link:
     """Where one upsampled source's subsamples fall in the other's upsampled image, which of them
     the other does not see (``hidden``: its depth there not within :data:`SAME_SURFACE_REL`), and
     the shares of the own and the other's residual in their steps (the other's ``weight`` where
-    it sees them)."""
+    it sees them); ``unsplit_edge``: ``this``'s :func:`_unsplit_edge_pixels`."""
 
-    def __init__(self, this: View, other: View, k: int, weight: float, channels: int):
+    def __init__(self, this: View, other: View, k: int, weight: float, channels: int, unsplit_edge: np.ndarray):
         h, w = this.depth.shape
         mu, mv, z = _pixels_in(this, other)
         z_other = cv2.remap(np.asarray(other.depth, np.float32), mu, mv, cv2.INTER_NEAREST,
@@ -212,7 +214,7 @@ class _Link:
             seen = (np.abs(z_other - z) <= SAME_SURFACE_REL * z).astype(np.float32)  # (k H, k W)
         self.maps = cv2.convertMaps(mu, mv, cv2.CV_16SC2)  # fixed point: remaps twice as fast
         self.pixel_seen = (_block_means(seen, k) > 0).reshape(h // k, w // k, 1)  # seen in part
-        self.unsplit_edge = _unsplit_edge_pixels(this, k)[..., None]
+        self.unsplit_edge = unsplit_edge[..., None]
         # per channel: numpy's products broadcast over a channel axis of 1 take 3x as long
         seen = np.repeat(seen[..., None] > 0, channels, axis=2)  # bool: a quarter of the memory
         self.hidden = ~seen
@@ -252,11 +254,13 @@ def _largest_channel(a: np.ndarray) -> np.ndarray:
 class _EdgeZone:
     """The subsamples of an upsampled view's depth-edge pixels (:func:`_depth_edge_pixels`) and
     of the pixels within :data:`EDGE_TV_RADIUS` of them (flat indices into its (k H, k W) grid),
-    with their neighbours' (replicated at the border), for :meth:`tv_descent`."""
+    with their neighbours' (replicated at the border), for :meth:`tv_descent`; ``edge``: the
+    depth-edge pixels if already known."""
 
-    def __init__(self, view: View, k: int):
+    def __init__(self, view: View, k: int, edge: np.ndarray | None = None):
         r = 2 * EDGE_TV_RADIUS + 1
-        zone = cv2.dilate(_depth_edge_pixels(view, k)[0].view(np.uint8), np.ones((r, r), np.uint8))
+        edge = _depth_edge_pixels(view, k)[0] if edge is None else edge
+        zone = cv2.dilate(edge.view(np.uint8), np.ones((r, r), np.uint8))
         ys, xs = np.nonzero(np.repeat(np.repeat(zone, k, 0), k, 1))
         h, w = view.depth.shape
         up, down = np.maximum(ys - 1, 0) * w, np.minimum(ys + 1, h - 1) * w
@@ -291,11 +295,10 @@ def _depth_edge_pixels(view: View, k: int):
     return depth_edge_pixels(planes[len(planes) // 2], quantization=quantization_of(view)), planes
 
 
-def _unsplit_edge_pixels(view: View, k: int) -> np.ndarray:
-    """(H, W) bool: the depth-edge pixels (:func:`~ibr.render.upsample.depth_edge_pixels` of the
-    centre subsamples) of an upsampled view whose k x k subsamples all lie within
-    :data:`SAME_SURFACE_REL` of each other."""
-    edge, planes = _depth_edge_pixels(view, k)
+def _unsplit_edge_pixels(edge: np.ndarray, planes: list) -> np.ndarray:
+    """(H, W) bool: the depth-edge pixels of an upsampled view (``edge``, ``planes``:
+    :func:`_depth_edge_pixels`) whose k x k subsamples all lie within :data:`SAME_SURFACE_REL`
+    of each other."""
     with np.errstate(invalid="ignore"):
         one_surface = np.fmax.reduce(planes) <= np.fmin.reduce(planes) * (1 + SAME_SURFACE_REL)
     return edge & one_surface
