@@ -188,6 +188,23 @@ def test_a_silhouette_on_pixel_edges_keeps_each_side_flat():
     assert np.abs(up.color.astype(int) - expected)[edge].max() <= 1
 
 
+def test_a_mixed_pixel_starts_from_its_clean_neighbours_on_the_same_surface():
+    """The start of a depth-edge pixel's subsamples (``_within_surfaces``): a far pixel that mixes
+    a near surface (colour 100 between the near 200 and the far 50) gives its subsample a third of
+    a pixel toward its clean far neighbour that neighbour's colour (50; with the mixed pixel's own
+    colour among the bilinear taps, 83.3), and keeps its own colour where its surface has no
+    clean tap (the centre subsample, and the one toward the near side)."""
+    from ibr.render.upsample import _within_surfaces
+
+    color = np.array([[200, 200, 100, 50, 50]], np.float32)[..., None].repeat(3, axis=2)
+    depth = np.array([[1, 1, 2, 2, 2]], np.float32)
+    edge = depth_edge_pixels(depth)
+    assert edge.tolist() == [[False, True, True, False, False]]
+    depth_k = np.repeat(np.repeat(depth, 3, 0), 3, 1)  # every subsample of the mixed pixel on the far side
+    got = _within_surfaces(color, depth, depth_k, edge, 3, np.array([0]), np.array([2]))[0, :, 0]
+    np.testing.assert_allclose(got.reshape(3, 3), [[100, 100, 50]] * 3, atol=1e-4)
+
+
 def test_the_edge_total_variation_is_the_divergence_of_the_unit_gradient():
     """``_EdgeZone.tv_descent`` at the zone's subsamples against the whole-image formula
     ``div(grad x / sqrt(|grad x|^2 + eps^2))`` (forward differences, zero past the border)."""
