@@ -188,12 +188,13 @@ def test_a_silhouette_on_pixel_edges_keeps_each_side_flat():
     assert np.abs(up.color.astype(int) - expected)[edge].max() <= 1
 
 
-def test_a_mixed_pixel_starts_from_its_clean_neighbours_on_the_same_surface():
+def test_a_mixed_pixel_of_a_pair_starts_from_its_clean_neighbours_on_the_same_surface():
     """The start of a depth-edge pixel's subsamples (``_within_surfaces``): a far pixel that mixes
     a near surface (colour 100 between the near 200 and the far 50) gives its subsample a third of
-    a pixel toward its clean far neighbour that neighbour's colour (50; with the mixed pixel's own
-    colour among the bilinear taps, 83.3), and keeps its own colour where its surface has no
-    clean tap (the centre subsample, and the one toward the near side)."""
+    a pixel toward its clean far neighbour that neighbour's colour (50) for a pair
+    (``clean_start``), and keeps its own colour where its surface has no clean tap (the centre
+    subsample, and the one toward the near side); a lone source's start takes the mixed pixel's
+    own colour among the taps (83.3)."""
     from ibr.render.upsample import _within_surfaces
 
     color = np.array([[200, 200, 100, 50, 50]], np.float32)[..., None].repeat(3, axis=2)
@@ -201,8 +202,16 @@ def test_a_mixed_pixel_starts_from_its_clean_neighbours_on_the_same_surface():
     edge = depth_edge_pixels(depth)
     assert edge.tolist() == [[False, True, True, False, False]]
     depth_k = np.repeat(np.repeat(depth, 3, 0), 3, 1)  # every subsample of the mixed pixel on the far side
-    got = _within_surfaces(color, depth, depth_k, edge, 3, np.array([0]), np.array([2]))[0, :, 0]
-    np.testing.assert_allclose(got.reshape(3, 3), [[100, 100, 50]] * 3, atol=1e-4)
+    for edge_pixels, outer in ((edge, 50.0), (None, 100 * 2 / 3 + 50 / 3)):
+        got = _within_surfaces(color, depth, depth_k, edge_pixels, 3, np.array([0]), np.array([2]))[0, :, 0]
+        np.testing.assert_allclose(got.reshape(3, 3), [[100, 100, outer]] * 3, atol=1e-4)
+    view = View(color.astype(np.uint8).repeat(4, axis=0), depth.repeat(4, axis=0), _camera(5, 4))
+    clean, lone = (upsample_view(view, 3, clean_start=c).color.astype(float) for c in (True, False))
+    assert (clean[:, 8] < lone[:, 8]).all()  # the outer subsample nearer the far colour
+    for up in (clean, lone):  # each pixel's subsamples still average to it
+        np.testing.assert_allclose(up.reshape(4, 3, 5, 3, 3).mean(axis=(1, 3)), view.color, atol=0.5)
+    with pytest.raises(TypeError, match="clean_start: expected True or False"):
+        upsample_view(view, 3, clean_start="yes")
 
 
 def test_the_edge_total_variation_is_the_divergence_of_the_unit_gradient():

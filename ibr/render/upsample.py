@@ -14,7 +14,8 @@ gives :mod:`ibr.render.supersample` a source at k times the resolution in which
   nineteenth session; an interpolation's two sources then refine each other's,
   :func:`~ibr.render.superres.super_resolve_pair`); at the depth-edge pixels' subsamples it
   starts from the bilinear taps on their own surface instead (:func:`_within_surfaces`,
-  twentieth session), once the silhouettes below are placed;
+  twentieth session), once the silhouettes below are placed; for a pair (``clean_start``) from
+  those that are no depth-edge pixels themselves where there is one (twenty-first session);
 * depth is interpolated in 1/z (affine on planes) within each surface, and replicated where a
   pixel's neighbours lie on another surface;
 * at every depth-edge pixel (a 4-neighbour more than 2 % nearer or farther) the k x k
@@ -100,14 +101,19 @@ def depth_edge_pixels(depth: np.ndarray, rel: float = EDGE_REL, quantization=Non
     return edge & np.isfinite(z)
 
 
-def upsample_view(view: View, k: int) -> View:
+def upsample_view(view: View, k: int, *, clean_start: bool = False) -> View:
     """``view`` at k times its width and height (same camera view, :meth:`Camera.resized`), with
     back-projected Lanczos-4 colour, depth interpolated in 1/z within surfaces and silhouettes
     placed inside the depth-edge pixels by their colours (module docstring). ``k`` = 1 returns
-    ``view``. The depth's quantization (:func:`~ibr.base.depth.quantization_of`) carries over."""
+    ``view``. The depth's quantization (:func:`~ibr.base.depth.quantization_of`) carries over.
+    ``clean_start``: the depth-edge pixels' subsamples start from the taps on their surface that
+    are no depth-edge pixels where there is one (:func:`_within_surfaces`), for a colour that a
+    partner source then refines (:func:`~ibr.render.superres.super_resolve_pair`)."""
     from .supersample import check_supersample
 
     k = check_supersample(k)
+    if not isinstance(clean_start, (bool, np.bool_)):
+        raise TypeError(f"clean_start: expected True or False, got {clean_start!r}")
     if not isinstance(view, View) or view.depth is None:
         raise ValueError("view: expected a View with depth")
     if k == 1:
@@ -117,16 +123,16 @@ def upsample_view(view: View, k: int) -> View:
     depth = _smooth_depth(view.depth, k)
     q = quantization_of(view)
     edge = _place_silhouettes(depth, view.depth, _unit_color(view.color), k, q)
-    color = _consistent_colour(view.color, k, view.depth, depth, edge)
+    color = _consistent_colour(view.color, k, view.depth, depth, edge, clean_start)
     return set_quantization(View(color, depth, camera, view.name), q)
 
 
 def _consistent_colour(color: np.ndarray, k: int, depth: np.ndarray, depth_k: np.ndarray,
-                       edge: np.ndarray) -> np.ndarray:
+                       edge: np.ndarray, clean_start: bool = False) -> np.ndarray:
     """``color`` at k x k: Lanczos-4, at the depth-edge pixels' subsamples (``edge``) from their
-    own surface only (:func:`_within_surfaces`), then back-projected until each pixel's k x k
-    mean is its colour (:func:`~ibr.render.superres.back_project`), in ``color``'s dtype and
-    layout."""
+    own surface only (:func:`_within_surfaces`; its clean taps first with ``clean_start``), then
+    back-projected until each pixel's k x k mean is its colour
+    (:func:`~ibr.render.superres.back_project`), in ``color``'s dtype and layout."""
     from .superres import _as_colour, _colour_limits, back_project
 
     c = np.asarray(color)
@@ -135,7 +141,7 @@ def _consistent_colour(color: np.ndarray, k: int, depth: np.ndarray, depth_k: np
     py, px = np.nonzero(edge)
     if py.size:
         _set_subsamples(start, py, px, k, _within_surfaces(c.reshape(h, w, -1).astype(np.float32), depth, depth_k,
-                                                           edge, k, py, px))
+                                                           edge if clean_start else None, k, py, px))
     up = back_project(start, c.reshape(h, w, -1), k, limits=_colour_limits(c.dtype))
     return _as_colour(up, c.dtype, (h * k, w * k) + c.shape[2:])
 
@@ -144,19 +150,24 @@ def _within_surfaces(color, depth, depth_k, edge, k, py, px) -> np.ndarray:
     """(n, k k, C) float32: the colour at the k x k subsamples of the depth-edge pixels ``(py,
     px)`` from the bilinear taps (pixel centres at ``(i + 0.5) / k - 0.5``) on the subsample's
     own surface only (the tap pixel's ``depth`` within :data:`EDGE_REL` of the subsample's
-    ``depth_k``) that are no depth-edge pixels themselves (``edge``: mixed colours), renormalized;
-    where none is, the taps on its surface with the depth-edge pixels; the pixel's own colour
-    where no tap is. Lanczos-4 across a silhouette mixes the other surface into a depth-edge
-    pixel's subsamples (a dark limb into the face behind); this start instead (then
+    ``depth_k``), renormalized; the pixel's own colour where no tap is. With the depth-edge
+    pixels ``edge`` (else None), from the taps on the surface that are none of them (mixed
+    colours) where there is one. Lanczos-4 across a silhouette mixes the other surface into a
+    depth-edge pixel's subsamples (a dark limb into the face behind); this start instead (then
     back-projected; twentieth session, ``supersample=3``'s edge band) clutter 32.27 -> 32.40 dB,
     room 33.21 -> 33.35 (over the edge pixels and their neighbours 32.38 / 33.34; the taps of a
     masked Keys cubic 32.13 / 32.98, of Lanczos-2 32.38 / 33.31, of a Gaussian 32.39 / 33.35).
-    Twenty-first session: the clean taps first (28 % of room's edge subsamples have one) took
-    room 33.44 -> 33.57 dB (clutter 32.53 either way; without the pixel's own colour only:
-    33.53; clean taps of a tent 1.5 / 2 px wide: 33.50 / 33.49; Lanczos-4 whose other taps take
-    this start: 33.57, over the edge pixels' neighbours too 33.59 and clutter 32.51)."""
+    Twenty-first session, the clean taps first (28 % of room's edge subsamples have one): room
+    33.44 -> 33.57 dB, clutter 32.53 either way (without the pixel's own colour only: 33.53; clean
+    taps of a tent 1.5 / 2 px wide: 33.50 / 33.49; Lanczos-4 whose other taps take this start:
+    33.57, over the edge pixels' neighbours too 33.59 and clutter 32.51). Only for a pair: a lone
+    source's mixed pixel has no partner to say which of its subsamples hold the other surface, and
+    the back-projection darkens them all (a stereo pair's eyes, ``supersample=3``, against ray
+    traced ones: room 42.02 -> 41.84 dB, clutter 38.73 -> 38.30; clutter's off-band pixels of a
+    lone warp 14, 26 -> 24, 44 beside the disocclusions)."""
     h, w = depth.shape
     z = np.asarray(depth, np.float32)
+    levels = 1 if edge is None else 2  # (the clean taps,) all taps on the surface: the first that has one
     out = np.empty((py.size, k * k, color.shape[2]), np.float32)
     for idx in range(k * k):
         iy, ix = divmod(idx, k)
@@ -164,19 +175,19 @@ def _within_surfaces(color, depth, depth_k, edge, k, py, px) -> np.ndarray:
         y0, x0 = np.floor(cy).astype(np.intp), np.floor(cx).astype(np.intp)
         fy, fx = (cy - y0).astype(np.float32), (cx - x0).astype(np.float32)
         zs = depth_k[py * k + iy, px * k + ix]
-        acc = np.zeros((2, py.size, color.shape[2]), np.float32)  # clean taps, all taps on the surface
-        total = np.zeros((2, py.size), np.float32)
+        acc = np.zeros((levels, py.size, color.shape[2]), np.float32)
+        total = np.zeros((levels, py.size), np.float32)
         for jy, wy in ((y0, 1 - fy), (y0 + 1, fy)):
             for jx, wx in ((x0, 1 - fx), (x0 + 1, fx)):
                 jy_, jx_ = np.clip(jy, 0, h - 1), np.clip(jx, 0, w - 1)
                 with np.errstate(invalid="ignore"):
                     same = np.abs(z[jy_, jx_] - zs) <= EDGE_REL * zs
-                for j, use in enumerate((same & ~edge[jy_, jx_], same)):
+                for j, use in enumerate([same] if edge is None else [same & ~edge[jy_, jx_], same]):
                     wgt = wy * wx * use
                     acc[j] += wgt[:, None] * color[jy_, jx_]
                     total[j] += wgt
         value = color[py, px]
-        for j in (1, 0):  # the clean taps' reading where there is one
+        for j in reversed(range(levels)):
             own = total[j] > 1e-6
             value = np.where(own[:, None], acc[j] / np.where(own, total[j], 1)[:, None], value)
         out[:, idx] = value

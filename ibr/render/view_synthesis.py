@@ -166,15 +166,16 @@ class _Source:
             v = self._upsampled[k] = _with_mixed_radius(self._upsample(k), k)
         return set_quantization(v, quantization_of(self._view()))  # as the view's is now (it may have been set since)
 
-    def _upsample(self, k: int, refined_key=None) -> View:
+    def _upsample(self, k: int, refined_key=None, clean_start: bool = False) -> View:
         """:func:`~ibr.render.upsample.upsample_view` of the source, or with ``refined_key`` (the
         options of a mesh of this source refined against its partner, :func:`_with_partners`) of
-        the source with that mesh's depth instead of its stored codes (:func:`_upsampled_pair`)."""
+        the source with that mesh's depth instead of its stored codes (:func:`_upsampled_pair`);
+        ``clean_start`` for a colour its partner refines."""
         from .upsample import upsample_view
 
         view = self._view()
         source = view if refined_key is None else _with_mesh_depth(view, source_mesh(view, **dict(refined_key)))
-        return upsample_view(source, k)
+        return upsample_view(source, k, clean_start=clean_start)
 
     def upsampled_with(self, partner: View, k: int, refined_key=None, partner_key=None) -> View:
         """The source at k x k as :meth:`_upsample`, its colour refined together with
@@ -187,7 +188,7 @@ class _Source:
         other.drop_dead_partners()
         key, key_other = (k, refined_key, weakref.ref(partner), partner_key), (k, partner_key, self._view, refined_key)
         if key not in self._upsampled or key_other not in other._upsampled:
-            ups = (self._upsample(k, refined_key), other._upsample(k, partner_key))
+            ups = (self._upsample(k, refined_key, clean_start=True), other._upsample(k, partner_key, clean_start=True))
             colours = super_resolve_pair((view, partner), ups, k)
             refined = [_with_mixed_radius(View(c, u.depth, u.camera, u.name), k) for c, u in zip(colours, ups)]
             self._upsampled[key], other._upsampled[key_other] = refined
