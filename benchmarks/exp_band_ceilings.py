@@ -11,7 +11,9 @@ Edge band PSNR (bench_edges.edge_band, t = .25/.5/.75) of
    exact colour only at the source's depth-edge pixels (the renderer box-filters every pixel
    since the nineteenth session, as the truths are made); and the exact colour made true to the
    source pixels (each pixel's residual spread over its subsamples: a super-resolution perfect
-   up to the observations), everywhere and at the edge pixels only;
+   up to the observations), everywhere and at the edge pixels only; and the exact colour
+   low-passed within each surface to the sources' Nyquist frequency and made true to the
+   pixels (an ideal reconstruction at the sources' sampling rate), with our and the exact depth;
 3. our upsampled sources with the exact depth where ours is within 2 % of it (what better depth
    values of the surfaces would give) or at the edge subsamples ours puts on another surface
    (what better silhouette labels would give).
@@ -74,6 +76,12 @@ def perfect_sources(name, scene, truths):
             a, b, _ = be.load_pair(name)  # fresh views: nothing cached
             frames = interpolate(a, b, cams, fill="none", supersample=3)
         rows[label] = be.edge_scores(frames, truths)[0]
+    for label, exact_depth in (("supersample=3, our depth, band-limited exact colour", False),
+                               ("supersample=3, exact depth, band-limited exact colour", True)):
+        with mock.patch.object(upsample, "upsample_view", _bandlimited_upsampling(scene, exact_depth)), as_given:
+            a, b, _ = be.load_pair(name)
+            frames = interpolate(a, b, cams, fill="none", supersample=3)
+        rows[label] = be.edge_scores(frames, truths)[0]
     for label, where in (("supersample=3, exact depth where ours is within 2 %", "within"),
                          ("supersample=3, exact depth at edge subsamples > 2 % off", "edge_off")):
         with mock.patch.object(upsample, "upsample_view", _corrected_upsampling(scene, where)):
@@ -95,8 +103,8 @@ def _exact_upsampling(scene, depth: bool, colour: str | None, consistent: bool =
     subsamples differ where the texture aliases: by 3.7 levels rms at room's edge pixels)."""
     original = upsample.upsample_view
 
-    def exact(view, k):
-        up = original(view, k)
+    def exact(view, k, **options):
+        up = original(view, k, **options)
         big = render(scene, view.camera.resized(view.camera.width * k, view.camera.height * k),
                      supersample=3 if colour else 1)
         color = up.color
@@ -113,6 +121,46 @@ def _exact_upsampling(scene, depth: bool, colour: str | None, consistent: bool =
     return exact
 
 
+def _bandlimited_upsampling(scene, exact_depth: bool):
+    """An ``upsample_view`` whose colour is the scene's exact 3x colour low-passed within each
+    surface to the source's Nyquist frequency (:func:`_lowpass_within_surfaces`) and made true to
+    the source pixels: an ideal reconstruction at the sources' sampling rate (it still knows the
+    texture a mixed pixel hides); ``exact_depth``: with the scene's exact 3x depth, else ours."""
+    original = upsample.upsample_view
+
+    def bandlimited(view, k, **options):
+        up = original(view, k, **options)
+        camera = view.camera.resized(view.camera.width * k, view.camera.height * k)
+        exact_z = render(scene, camera).depth
+        colour = render(scene, camera, supersample=3).color.astype(np.float64) * 255
+        for axis in (0, 1):
+            colour = _lowpass_within_surfaces(colour, exact_z, axis, 0.5 / k)
+        true_to_pixels = superres._consistent(colour.astype(np.float32), view.color.astype(np.float32), k, (0.0, 255.0))
+        return dataclasses.replace(up, color=superres._as_colour(true_to_pixels, up.color.dtype, up.color.shape),
+                                   depth=exact_z.astype(np.float32) if exact_depth else up.depth)
+
+    return bandlimited
+
+
+def _lowpass_within_surfaces(colour, z, axis: int, cutoff: float, radius: int = 9):
+    """``colour`` ((H, W, C)) filtered along ``axis`` by a Lanczos-windowed sinc of ``cutoff``
+    cycles per sample (``radius`` taps each side), each sample from the taps on its own surface
+    only (depth ``z`` within 2 %), renormalized (the sample itself where they weigh under 5 %)."""
+    n = np.arange(-radius, radius + 1)
+    taps = 2 * cutoff * np.sinc(2 * cutoff * n) * np.sinc(n / radius)
+    taps /= taps.sum()
+    acc, total = np.zeros_like(colour), np.zeros(z.shape)
+    for offset, weight in zip(n, taps):
+        at = np.clip(np.arange(z.shape[axis]) + offset, 0, z.shape[axis] - 1)
+        z_at = np.take(z, at, axis=axis)
+        with np.errstate(invalid="ignore"):
+            same = weight * (np.abs(z_at - z) <= 0.02 * z)
+        acc += same[..., None] * np.take(colour, at, axis=axis)
+        total += same
+    ok = np.abs(total) > 0.05
+    return np.where(ok[..., None], acc / np.where(ok, total, 1.0)[..., None], colour)
+
+
 def _corrected_upsampling(scene, where):
     """An ``upsample_view`` whose depth takes the scene's exact k x k depth ``where`` = "within":
     at the subsamples whose depth is within 2 % of it (the values of the surfaces ours puts
@@ -120,8 +168,8 @@ def _corrected_upsampling(scene, where):
     on the wrong surface)."""
     original = upsample.upsample_view
 
-    def corrected(view, k):
-        up = original(view, k)
+    def corrected(view, k, **options):
+        up = original(view, k, **options)
         exact = render(scene, view.camera.resized(view.camera.width * k, view.camera.height * k)).depth
         with np.errstate(invalid="ignore"):
             close = np.abs(up.depth - exact) <= 0.02 * exact

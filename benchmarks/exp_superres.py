@@ -43,7 +43,7 @@ def main() -> int:
     for name in ("clutter", "room"):
         scene = make_scene(name)
         a, b, _ = be.load_pair(name)
-        ups = (upsample_view(a, 3), upsample_view(b, 3))
+        ups = (upsample_view(a, 3, clean_start=True), upsample_view(b, 3, clean_start=True))  # as a pair's
         refined = super_resolve_pair((a, b), ups, 3)
         for side, v, u, c in (("a", a, ups[0], refined[0]), ("b", b, ups[1], refined[1])):
             exact = render(scene, u.camera, supersample=3).color * 255
