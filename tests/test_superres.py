@@ -203,8 +203,9 @@ def test_a_mixed_pixel_of_a_pair_starts_from_its_clean_neighbours_on_the_same_su
     assert edge.tolist() == [[False, True, True, False, False]]
     depth_k = np.repeat(np.repeat(depth, 3, 0), 3, 1)  # every subsample of the mixed pixel on the far side
     for edge_pixels, outer in ((edge, 50.0), (None, 100 * 2 / 3 + 50 / 3)):
-        got = _within_surfaces(color, depth, depth_k, edge_pixels, 3, np.array([0]), np.array([2]))[0, :, 0]
-        np.testing.assert_allclose(got.reshape(3, 3), [[100, 100, outer]] * 3, atol=1e-4)
+        got, from_clean = _within_surfaces(color, depth, depth_k, edge_pixels, 3, np.array([0]), np.array([2]))
+        np.testing.assert_allclose(got[0, :, 0].reshape(3, 3), [[100, 100, outer]] * 3, atol=1e-4)
+        assert from_clean[0].reshape(3, 3).tolist() == [[False, False, edge_pixels is not None]] * 3
     view = View(color.astype(np.uint8).repeat(4, axis=0), depth.repeat(4, axis=0), _camera(5, 4))
     clean, lone = (upsample_view(view, 3, clean_start=c).color.astype(float) for c in (True, False))
     assert (clean[:, 8] < lone[:, 8]).all()  # the outer subsample nearer the far colour
@@ -212,6 +213,30 @@ def test_a_mixed_pixel_of_a_pair_starts_from_its_clean_neighbours_on_the_same_su
         np.testing.assert_allclose(up.reshape(4, 3, 5, 3, 3).mean(axis=(1, 3)), view.color, atol=0.5)
     with pytest.raises(TypeError, match="clean_start: expected True or False"):
         upsample_view(view, 3, clean_start="yes")
+
+
+def test_a_pairs_unsplit_mixed_pixel_holds_the_foreground_share_beside_the_step():
+    """``_share_beside_the_step``: the far pixel of the row above (colour 100 between the near 200
+    and the far 50), all of whose subsamples lie on the far surface, keeps the far colour (50)
+    away from the step and puts what its colour holds beyond it (the near surface's third) in the
+    subsample column next to the step: 200, 50, 50, so that its mean stays 100. Where that share
+    would leave the colour's range (a colour of 220: 560), the start stays as it was."""
+    from ibr.render.upsample import _share_beside_the_step, _within_surfaces
+
+    depth = np.array([[1, 1, 2, 2, 2]], np.float32)
+    edge = depth_edge_pixels(depth)
+    depth_k = np.repeat(np.repeat(depth, 3, 0), 3, 1)
+    py, px = np.array([0]), np.array([2])
+    for mixed, expected in ((100, [[200, 50, 50]] * 3), (220, None)):
+        color = np.array([[200, 200, mixed, 50, 50]], np.float32)[..., None].repeat(3, axis=2)
+        values, from_clean = _within_surfaces(color, depth, depth_k, edge, 3, py, px)
+        before = values.copy()
+        _share_beside_the_step(values, from_clean, color, depth, depth_k, edge, 3, py, px, (0.0, 255.0))
+        if expected is None:
+            np.testing.assert_array_equal(values, before)
+        else:
+            np.testing.assert_allclose(values[0, :, 0].reshape(3, 3), expected, atol=1e-3)
+            assert values[0, :, 0].mean() == pytest.approx(mixed)
 
 
 def test_the_edge_total_variation_is_the_divergence_of_the_unit_gradient():
