@@ -218,25 +218,16 @@ def _share_beside_the_step(values, from_clean, color, depth, depth_k, edge, k, p
     after the fill 40.15 -> 40.17 and 42.07 -> 42.08 dB, clutter's pixels more than 16 levels
     off 988 / 1203 / 1105 -> 982 / 1187 / 1090, the line 16 -> 8 of them (its subsamples' mean
     colour instead of the clean taps' where there are some: 33.62 / 32.51, the line 9)."""
-    h, w = depth.shape
-    z = np.asarray(depth, np.float32)
-    zp = z[py, px]
-    zs = np.stack([depth_k[py * k + iy, px * k + ix] for iy in range(k) for ix in range(k)], axis=1)
-    with np.errstate(invalid="ignore"):
-        own_surface = (np.abs(zs - zp[:, None]) <= EDGE_REL * zp[:, None]).all(axis=1)
-    near, far = np.zeros((py.size, 9), bool), np.zeros((py.size, 9), bool)
-    acc = np.zeros((py.size, color.shape[2]), np.float32)
-    count = np.zeros(py.size, np.float32)
-    for i, (dy, dx) in enumerate(_NEIGHBOURS):
-        jy, jx = py + dy, px + dx
-        inside = (jy >= 0) & (jy < h) & (jx >= 0) & (jx < w)
-        jy, jx = np.clip(jy, 0, h - 1), np.clip(jx, 0, w - 1)
-        with np.errstate(invalid="ignore"):
-            near[:, i] = inside & (z[jy, jx] < zp * (1 - EDGE_REL))
-            far[:, i] = inside & (np.abs(z[jy, jx] - zp) <= EDGE_REL * zp)
-        clean = far[:, i] & ~edge[jy, jx]
-        acc += clean[:, None] * color[jy, jx]
-        count += clean
+    zp = np.asarray(depth, np.float32)[py, px]
+    subsample_z = np.stack([depth_k[py * k + iy, px * k + ix] for iy in range(k) for ix in range(k)], axis=1)
+    zs, cs, clean = _neighbourhoods(np.asarray(depth, np.float32), color, edge, py, px)
+    with np.errstate(invalid="ignore"):  # (NaN outside the image: neither)
+        own_surface = (np.abs(subsample_z - zp[:, None]) <= EDGE_REL * zp[:, None]).all(axis=1)
+        near = zs < zp[:, None] * (1 - EDGE_REL)
+        far = np.abs(zs - zp[:, None]) <= EDGE_REL * zp[:, None]
+    clean &= far
+    count = clean.sum(axis=1)
+    acc = (cs * clean[..., None]).sum(axis=1)
     ny, nx = _normal(near, far)
     sub = (np.arange(k) + 0.5) / k - 0.5
     sy, sx = (a.ravel() for a in np.meshgrid(sub, sub, indexing="ij"))
