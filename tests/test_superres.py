@@ -215,28 +215,31 @@ def test_a_mixed_pixel_of_a_pair_starts_from_its_clean_neighbours_on_the_same_su
         upsample_view(view, 3, clean_start="yes")
 
 
-def test_a_pairs_unsplit_mixed_pixel_holds_the_foreground_share_beside_the_step():
-    """``_share_beside_the_step``: the far pixel of the row above (colour 100 between the near 200
-    and the far 50), all of whose subsamples lie on the far surface, keeps the far colour (50)
-    away from the step and puts what its colour holds beyond it (the near surface's third) in the
-    subsample column next to the step: 200, 50, 50, so that its mean stays 100. Where that share
-    would leave the colour's range (a colour of 220: 560), the start stays as it was."""
+def test_a_pairs_unsplit_mixed_pixel_holds_the_other_surfaces_share_beside_the_step():
+    """``_share_beside_the_step``: a far pixel (colour 100 between the near 200 and the far 50),
+    all of whose subsamples lie on the far surface, keeps the far colour (50) away from the step
+    and puts what its colour holds beyond it (the near surface's third) in the subsample column
+    next to the step: 200, 50, 50, so that its mean stays 100; a near pixel mixing in the far
+    surface likewise (150 between 50 and 200: 50, 200, 200). Where that share would leave the
+    colour's range (a far pixel of 220: 560), the start stays as it was."""
     from ibr.render.upsample import _share_beside_the_step, _within_surfaces
 
-    depth = np.array([[1, 1, 2, 2, 2]], np.float32)
-    edge = depth_edge_pixels(depth)
-    depth_k = np.repeat(np.repeat(depth, 3, 0), 3, 1)
     py, px = np.array([0]), np.array([2])
-    for mixed, expected in ((100, [[200, 50, 50]] * 3), (220, None)):
-        color = np.array([[200, 200, mixed, 50, 50]], np.float32)[..., None].repeat(3, axis=2)
+    for row, z, expected in (([200, 200, 100, 50, 50], [1, 1, 2, 2, 2], [200, 50, 50]),
+                             ([50, 50, 150, 200, 200], [2, 2, 1, 1, 1], [50, 200, 200]),
+                             ([200, 200, 220, 50, 50], [1, 1, 2, 2, 2], None)):
+        depth = np.array([z], np.float32)
+        edge = depth_edge_pixels(depth)
+        depth_k = np.repeat(np.repeat(depth, 3, 0), 3, 1)  # the mixed pixel's subsamples all on its own surface
+        color = np.array([row], np.float32)[..., None].repeat(3, axis=2)
         values, from_clean = _within_surfaces(color, depth, depth_k, edge, 3, py, px)
         before = values.copy()
         _share_beside_the_step(values, from_clean, color, depth, depth_k, edge, 3, py, px, (0.0, 255.0))
         if expected is None:
             np.testing.assert_array_equal(values, before)
         else:
-            np.testing.assert_allclose(values[0, :, 0].reshape(3, 3), expected, atol=1e-3)
-            assert values[0, :, 0].mean() == pytest.approx(mixed)
+            np.testing.assert_allclose(values[0, :, 0].reshape(3, 3), [expected] * 3, atol=1e-3)
+            assert values[0, :, 0].mean() == pytest.approx(row[2])
 
 
 def test_the_edge_total_variation_is_the_divergence_of_the_unit_gradient():

@@ -15,8 +15,8 @@ gives :mod:`ibr.render.supersample` a source at k times the resolution in which
   :func:`~ibr.render.superres.super_resolve_pair`); at the depth-edge pixels' subsamples it
   starts from the bilinear taps on their own surface instead (:func:`_within_surfaces`,
   twentieth session), once the silhouettes below are placed; for a pair (``clean_start``) from
-  those that are no depth-edge pixels themselves where there is one, and a far-side edge pixel
-  the silhouette does not cross holds the foreground's share next to the step
+  those that are no depth-edge pixels themselves where there is one, and an edge pixel the
+  silhouette does not cross holds the other surface's share next to the step
   (:func:`_share_beside_the_step`; twenty-first session);
 * depth is interpolated in 1/z (affine on planes) within each surface, and replicated where a
   pixel's neighbours lie on another surface;
@@ -204,39 +204,41 @@ def _within_surfaces(color, depth, depth_k, edge, k, py, px):
 
 def _share_beside_the_step(values, from_clean, color, depth, depth_k, edge, k, py, px, limits) -> None:
     """A pair's start (``values``, (n, k k, C), in place) at the depth-edge pixels ``(py, px)``
-    whose k x k subsamples all lie on their own surface with a nearer 3 x 3 neighbour (the
-    silhouette kept outside them, e.g. where the colours are too alike to read a coverage) and
-    clean neighbours on their own surface: the subsamples without a clean tap
-    (``from_clean``) take those neighbours' mean colour, and what the pixel's colour holds beyond
-    the others goes to the subsamples next to the step (the row or column toward the nearer
-    neighbours along the edge normal), where the foreground mixed into it lies; skipped where
-    that leaves ``limits``. Spread over the pixel, that share stayed on the background when a
-    disocclusion opened beside it, one subsample of which the rim replacement reaches (a dark
-    line beside clutter's left pole under ``supersample=3``). Twenty-first session,
-    ``supersample=3``: band room 33.57 -> 33.63 dB, clutter 32.53 -> 32.51 (all covered 40.92 ->
-    40.87, covered off-band pixels over 48 before the fill 0, 4, 7 -> 16, 4, 9, none after it);
-    after the fill 40.15 -> 40.17 and 42.07 -> 42.08 dB, clutter's pixels more than 16 levels
-    off 988 / 1203 / 1105 -> 982 / 1187 / 1090, the line 16 -> 8 of them (its subsamples' mean
-    colour instead of the clean taps' where there are some: 33.62 / 32.51, the line 9)."""
+    whose k x k subsamples all lie on their own surface (the silhouette kept outside them, e.g.
+    where the colours are too alike to read a coverage), with clean 3 x 3 neighbours on that
+    surface and others off it: the subsamples without a clean tap (``from_clean``) take the clean
+    neighbours' mean colour, and what the pixel's colour holds beyond the others goes to the
+    subsamples next to the step (the row or column toward the neighbours off the surface along
+    the edge normal), where the other surface mixed into it lies; skipped where that leaves
+    ``limits``. Spread over a background pixel, a foreground's share stayed on the background
+    when a disocclusion opened beside it, one subsample of which the rim replacement reaches (a
+    dark line beside clutter's left pole under ``supersample=3``). Twenty-first session,
+    ``supersample=3``: on the farther side of steps only, band room 33.57 -> 33.63 dB, clutter
+    32.53 -> 32.51 (all covered 40.92 -> 40.87, covered off-band pixels over 48 before the fill
+    0, 4, 7 -> 16, 4, 9, none after it), after the fill 40.15 -> 40.17 and 42.07 -> 42.08 dB,
+    clutter's pixels more than 16 levels off 988 / 1203 / 1105 -> 982 / 1187 / 1090, the line
+    16 -> 8 of them (the other subsamples at the clean neighbours' mean: 33.62 / 32.51, the line
+    9); on both sides **33.65 / 32.55** (40.90 all covered), after the fill 40.20 and 42.09,
+    965 / 1172 / 1081 pixels more than 16 levels off, the line 8."""
     zp = np.asarray(depth, np.float32)[py, px]
     subsample_z = np.stack([depth_k[py * k + iy, px * k + ix] for iy in range(k) for ix in range(k)], axis=1)
     zs, cs, clean = _neighbourhoods(np.asarray(depth, np.float32), color, edge, py, px)
     with np.errstate(invalid="ignore"):  # (NaN outside the image: neither)
         own_surface = (np.abs(subsample_z - zp[:, None]) <= EDGE_REL * zp[:, None]).all(axis=1)
-        near = zs < zp[:, None] * (1 - EDGE_REL)
-        far = np.abs(zs - zp[:, None]) <= EDGE_REL * zp[:, None]
-    clean &= far
+        own = np.abs(zs - zp[:, None]) <= EDGE_REL * zp[:, None]
+        off = np.isfinite(zs) & ~own
+    clean &= own
     count = clean.sum(axis=1)
     acc = (cs * clean[..., None]).sum(axis=1)
-    ny, nx = _normal(near, far)
+    ny, nx = _normal(off, own)
     sub = (np.arange(k) + 0.5) / k - 0.5
     sy, sx = (a.ravel() for a in np.meshgrid(sub, sub, indexing="ij"))
-    toward_near = -(ny[:, None] * sy[None] + nx[:, None] * sx[None])  # (n, k k)
-    beside = toward_near >= toward_near.max(axis=1, keepdims=True) - 1e-6
+    toward_step = -(ny[:, None] * sy[None] + nx[:, None] * sx[None])  # (n, k k)
+    beside = toward_step >= toward_step.max(axis=1, keepdims=True) - 1e-6
     others = np.where(from_clean[..., None], values, (acc / np.maximum(count, 1)[:, None])[:, None, :])
     rest = np.where(beside[..., None], 0, others).sum(axis=1)
     share = (k * k * color[py, px] - rest) / beside.sum(axis=1)[:, None]
-    use = own_surface & near.any(axis=1) & (count > 0) & ((ny != 0) | (nx != 0))
+    use = own_surface & off.any(axis=1) & (count > 0) & ((ny != 0) | (nx != 0))
     if limits is not None:
         use &= ((share >= limits[0]) & (share <= limits[1])).all(axis=1)
     values[use] = np.where(beside[use][..., None], share[use][:, None, :], others[use])
