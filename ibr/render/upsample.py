@@ -153,12 +153,12 @@ def _consistent_colour(color: np.ndarray, k: int, depth: np.ndarray, depth_k: np
 
 
 def _within_surfaces(color, depth, depth_k, edge, k, py, px):
-    """((n, k k, C) float32, (n, k k) bool): the colour at the k x k subsamples of the depth-edge pixels ``(py,
-    px)`` from the bilinear taps (pixel centres at ``(i + 0.5) / k - 0.5``) on the subsample's
-    own surface only (the tap pixel's ``depth`` within :data:`EDGE_REL` of the subsample's
-    ``depth_k``), renormalized; the pixel's own colour where no tap is. With the depth-edge
-    pixels ``edge`` (else None), from the taps on the surface that are none of them (mixed
-    colours) where there is one. Lanczos-4 across a silhouette mixes the other surface into a
+    """(values, from_clean): (n, k k, C) float32, the colour at the k x k subsamples of the
+    depth-edge pixels ``(py, px)`` from the bilinear taps (pixel centres at ``(i + 0.5) / k -
+    0.5``) on the subsample's own surface only (the tap pixel's ``depth`` within :data:`EDGE_REL`
+    of the subsample's ``depth_k``), renormalized; the pixel's own colour where no tap is. With
+    the depth-edge pixels ``edge`` (else None), from the taps on the surface that are none of
+    them (mixed colours) where there is one: ``from_clean``, (n, k k) bool, marks those. Lanczos-4 across a silhouette mixes the other surface into a
     depth-edge pixel's subsamples (a dark limb into the face behind); this start instead (then
     back-projected; twentieth session, ``supersample=3``'s edge band) clutter 32.27 -> 32.40 dB,
     room 33.21 -> 33.35 (over the edge pixels and their neighbours 32.38 / 33.34; the taps of a
@@ -221,7 +221,7 @@ def _share_beside_the_step(values, from_clean, color, depth, depth_k, edge, k, p
     9); on both sides **33.65 / 32.55** (40.90 all covered), after the fill 40.20 and 42.09,
     965 / 1172 / 1081 pixels more than 16 levels off, the line 8."""
     zp = np.asarray(depth, np.float32)[py, px]
-    subsample_z = np.stack([depth_k[py * k + iy, px * k + ix] for iy in range(k) for ix in range(k)], axis=1)
+    subsample_z = _subsamples_of(depth_k, py, px, k)
     zs, cs, clean = _neighbourhoods(np.asarray(depth, np.float32), color, edge, py, px)
     with np.errstate(invalid="ignore"):  # (NaN outside the image: neither)
         own_surface = (np.abs(subsample_z - zp[:, None]) <= EDGE_REL * zp[:, None]).all(axis=1)
@@ -231,8 +231,7 @@ def _share_beside_the_step(values, from_clean, color, depth, depth_k, edge, k, p
     count = clean.sum(axis=1)
     acc = (cs * clean[..., None]).sum(axis=1)
     ny, nx = _normal(off, own)
-    sub = (np.arange(k) + 0.5) / k - 0.5
-    sy, sx = (a.ravel() for a in np.meshgrid(sub, sub, indexing="ij"))
+    sy, sx = _subsample_offsets(k)
     toward_step = -(ny[:, None] * sy[None] + nx[:, None] * sx[None])  # (n, k k)
     beside = toward_step >= toward_step.max(axis=1, keepdims=True) - 1e-6
     others = np.where(from_clean[..., None], values, (acc / np.maximum(count, 1)[:, None])[:, None, :])
@@ -289,8 +288,7 @@ def _place_silhouettes(depth_k: np.ndarray, depth: np.ndarray, color: np.ndarray
         q = 1.0 / z  # NaN where the depth is NaN
     planes = _neighbour_planes(q, py, px)
     own_near = _continues_nearer_surface(zp, zmin, mid, near, planes)
-    sub = (np.arange(k) + 0.5) / k - 0.5
-    sy, sx = (a.ravel() for a in np.meshgrid(sub, sub, indexing="ij"))
+    sy, sx = _subsample_offsets(k)
     is_near = _straight_edge_sides(alpha, own_near, near, far, sy, sx)
     # where the colours cannot tell, the silhouette follows the depth's staircase smoothed
     is_near[~tell] = _staircase_sides(q, py[~tell], px[~tell], mid[~tell], own_near[~tell], sy, sx)
@@ -300,6 +298,18 @@ def _place_silhouettes(depth_k: np.ndarray, depth: np.ndarray, color: np.ndarray
     q_far = _within(_side_plane_at(planes, far, sy, sx), np.where(own_near, 1.0 / zmax, 1.0 / zp)[:, None])
     _set_subsamples(depth_k, py, px, k, 1.0 / np.where(is_near, q_near, q_far))
     return edge
+
+
+def _subsample_offsets(k: int):
+    """(sy, sx), each (k k,): the subsamples' offsets from their pixel's centre (px), row-major."""
+    sub = (np.arange(k) + 0.5) / k - 0.5
+    return tuple(a.ravel() for a in np.meshgrid(sub, sub, indexing="ij"))
+
+
+def _subsamples_of(image_k: np.ndarray, py, px, k: int) -> np.ndarray:
+    """(n, k k, ...): the k x k subsamples (row-major) of the pixels ``(py, px)`` of the upsampled
+    ``image_k`` (the inverse of :func:`_set_subsamples`)."""
+    return np.stack([image_k[py * k + iy, px * k + ix] for iy in range(k) for ix in range(k)], axis=1)
 
 
 def _set_subsamples(image_k: np.ndarray, py, px, k: int, values: np.ndarray) -> None:
