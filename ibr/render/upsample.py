@@ -57,7 +57,7 @@ import cv2
 import numpy as np
 
 from ..base.depth import quantization_of, set_quantization
-from ..base.validate import check_array, check_positive
+from ..base.validate import check_array, check_flag, check_positive
 from ..base.view import View
 
 __all__ = ["MIN_CONTRAST", "depth_edge_pixels", "upsample_view"]
@@ -114,8 +114,7 @@ def upsample_view(view: View, k: int, *, clean_start: bool = False) -> View:
     from .supersample import check_supersample
 
     k = check_supersample(k)
-    if not isinstance(clean_start, (bool, np.bool_)):
-        raise TypeError(f"clean_start: expected True or False, got {clean_start!r}")
+    clean_start = check_flag("clean_start", clean_start)
     if not isinstance(view, View) or view.depth is None:
         raise ValueError("view: expected a View with depth")
     if k == 1:
