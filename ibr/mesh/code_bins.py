@@ -19,6 +19,10 @@ quad that the exact depth would have split (clutter: 1 250 quads against 1 455),
 :func:`fit_mesh_in_code_bins` then halves a quad whose plane departs from its surface by more
 than a share of the exact depth's tolerance, and fits the halves again, until each part follows.
 
+:func:`depth_in_code_bins` does the same per pixel for what reads depth pixel by pixel (the
+upsampling of ``supersample=3``): a start (the fitted mesh's planes) smoothed within surfaces and
+moved into each pixel's bin, round after round.
+
 Measured (``python -c "import bench_edges as be; be.section_quantized()"`` in ``benchmarks/``,
 8-bit disparity against the exact depth, after :mod:`ibr.render.plane_refine`'s colour fit of
 the large quads, for every quad it did not take): clutter -0.56 -> -0.30 dB (planes refitted on
@@ -38,8 +42,9 @@ from ..base.depth import DepthQuantization
 from ..base.validate import check_array, check_finite_scalar
 from .quad_mesh import QuadMesh, _inv_depth, _rect_areas
 
-__all__ = ["ACCEPT_CODES", "GROW", "ITERATIONS", "MAX_WINDOW_PIXELS", "REJECT_AFTER", "REJECT_CODES", "RIDGE",
-           "SPLIT_SHARE", "SURFACE_STEP_CODES", "fit_mesh_in_code_bins", "fit_planes_in_code_bins"]
+__all__ = ["ACCEPT_CODES", "DEQUANTIZE_ITERATIONS", "GROW", "ITERATIONS", "MAX_WINDOW_PIXELS", "REJECT_AFTER",
+           "REJECT_CODES", "RIDGE", "SPLIT_SHARE", "SURFACE_STEP_CODES", "depth_in_code_bins", "fit_mesh_in_code_bins",
+           "fit_planes_in_code_bins"]
 
 #: Pixels up to this many 4-connected steps from a quad inform its surface (10 px: clutter
 #: -0.297 dB, room -0.223; with the plane rather than the surface tested, 8 / 10 / 12 px gave
@@ -69,6 +74,12 @@ MAX_WINDOW_PIXELS = 4096
 #: -0.17; 0.3 -0.17 / -0.17; 0.2 -0.26 / -0.16: the quadratic over the grown window is flatter
 #: than the curve it follows, so its gap understates the plane's error about twofold).
 SPLIT_SHARE = 0.3
+#: Rounds of :func:`depth_in_code_bins` (8-bit disparity under ``supersample=3``, clutter / room
+#: covered pixels: 10 rounds 40.04 / 41.94 dB, 20 40.05 / 41.92, 40 40.01 / 41.88).
+DEQUANTIZE_ITERATIONS = 20
+#: Neighbours whose starting inverse depths differ by more than this many codes are on different
+#: surfaces for :func:`depth_in_code_bins` (1.5: room 41.93 dB, one more pixel off the band).
+DEQUANTIZE_SURFACE_CODES = 1.0
 
 
 def fit_planes_in_code_bins(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarray, np.ndarray]:
@@ -94,6 +105,81 @@ def fit_planes_in_code_bins(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarr
     """
     planes, fitted, _ = _fit_quads(mesh, _Codes(mesh, depth), quads)
     return planes, fitted
+
+
+def depth_in_code_bins(start, codes, quantization: DepthQuantization, *,
+                       iterations: int = DEQUANTIZE_ITERATIONS) -> np.ndarray:
+    """Per-pixel depth inside each pixel's code bin, smooth within surfaces, from a start.
+
+    Alternating projections (the per-pixel sibling of :func:`fit_planes_in_code_bins`): each
+    round replaces a pixel's inverse depth by the mean of its opposite 4-neighbour pairs (left
+    and right, up and down) that lie on its surface, which leaves every plane of inverse depth as
+    it is and flattens only what curves or steps, then moves it to the nearest point of its bin
+    (half a code either side of its stored value). A mesh's planes (the start) are up to a code
+    off where a plane must follow a curve or where its fit missed; the codes pin the surface
+    where they change, and the smoothing carries that between the changes.
+
+    Measured (8-bit disparity of the bundled pairs, ``interpolate(..., supersample=3)``, covered
+    pixels, against the exact depth's; the start the sources' fitted meshes,
+    :mod:`ibr.render.plane_refine`): clutter -1.12 -> -0.85 dB, room -0.52 -> -0.21; clamping the
+    planes into the bins alone -0.99 / -0.38; the plain 4-neighbour mean (planes bent at their
+    borders) pushed the depth-edge pixels' errors up. The real motorcycle's disparity rounded to
+    integers, planes fitted to the right view's colour as the start: 0.197 -> 0.166 px rms
+    against the float ground truth.
+
+    Parameters
+    ----------
+    start : (H, W) float array
+        Planar depth to start from (scene units), e.g. :func:`ibr.mesh.mesh_depth` of a mesh of
+        ``codes``; NaN, 0 or inf where none. It also tells the surfaces apart: neighbours whose
+        starting inverse depths differ by more than :data:`DEQUANTIZE_SURFACE_CODES` codes are on
+        different ones.
+    codes : (H, W) float or integer array
+        The stored (quantized) planar depth, as decoded (scene units); NaN, 0 or inf where none.
+    quantization : DepthQuantization
+        The encoding's step (:class:`ibr.base.depth.DepthQuantization`).
+    iterations : int
+        Rounds of smoothing and projection, >= 0 (0: the start moved into the bins).
+
+    Returns
+    -------
+    (H, W) float32
+        Planar depth within half a code of ``codes`` wherever both inputs have depth; ``start``
+        elsewhere.
+    """
+    start = check_array("start", start, ndim=2, dtype_kind="f")
+    codes = check_array("codes", codes, shape=start.shape, dtype_kind="fiu")
+    if not isinstance(quantization, DepthQuantization):
+        raise TypeError(f"quantization: expected an ibr.base.depth.DepthQuantization, got "
+                        f"{type(quantization).__name__}")
+    if isinstance(iterations, (bool, np.bool_)) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
+        raise ValueError(f"iterations: expected an integer >= 0, got {iterations!r}")
+    guide, qc = _inv_depth(start), _inv_depth(codes)
+    valid = np.isfinite(guide) & np.isfinite(qc)
+    step = quantization.inv_step(np.where(valid, qc, 0.0))
+    lo, hi = np.where(valid, qc - 0.5 * step, 0.0), np.where(valid, qc + 0.5 * step, 0.0)
+    pairs = _surface_pairs(np.where(valid, guide, np.nan), DEQUANTIZE_SURFACE_CODES * step)
+    q = np.clip(np.where(valid, guide, 0.0), lo, hi)
+    count = sum(p.astype(np.float64) for p in pairs)
+    smoothed = count > 0
+    for _ in range(iterations):
+        padded = np.pad(q, 1, mode="edge")
+        total = np.where(pairs[0], padded[1:-1, :-2] + padded[1:-1, 2:], 0.0)
+        total += np.where(pairs[1], padded[:-2, 1:-1] + padded[2:, 1:-1], 0.0)
+        q = np.clip(np.where(smoothed, 0.5 * total / np.maximum(count, 1.0), q), lo, hi)
+    with np.errstate(divide="ignore"):
+        return np.where(valid, 1.0 / np.where(valid, q, 1.0), start).astype(np.float32)
+
+
+def _surface_pairs(guide, tolerance) -> tuple[np.ndarray, np.ndarray]:
+    """(left-right, up-down), each (H, W) bool: pixels both of whose neighbours along the axis
+    lie within ``tolerance`` ((H, W)) of their own ``guide`` value (NaN: no pixel)."""
+    padded = np.pad(guide, 1, constant_values=np.nan)
+    with np.errstate(invalid="ignore"):
+        def near(n):
+            return np.abs(n - guide) <= tolerance
+        return (near(padded[1:-1, :-2]) & near(padded[1:-1, 2:]),
+                near(padded[:-2, 1:-1]) & near(padded[2:, 1:-1]))
 
 
 def fit_mesh_in_code_bins(mesh: QuadMesh, depth, quads=None, *, tolerance=None) -> QuadMesh:
