@@ -327,14 +327,14 @@ def section_quantized():
                 n, (p, lp) = scores(*views, q)
             print(f"{name:<8} {label:<48} {n:6d} {n / n0:8.2f} {p:8.2f} {p - p0:+9.2f}   "
                   f"bilinear {lp:.2f} {lp - l0:+.2f}")
-        quantized_supersampled(name, (a, b), disparity_views(), disparity, truths)
+        quantized_supersampled(name, (a, b), disparity_views(), disparity, truths, mm)
     motorcycle_rounded_disparity()
 
 
-def quantized_supersampled(name, exact, codes, quantization, truths):
+def quantized_supersampled(name, exact, codes, quantization, truths, mm):
     """``supersample=3`` from 8-bit disparity codes against the exact depth's (the coarse source
-    upsampled from its fitted mesh's depth, and from its codes as before the seventeenth
-    session)."""
+    upsampled from its fitted mesh's depth moved into its codes' bins, and from its codes as
+    before the seventeenth session), and from the 16-bit millimetres ``mm``."""
     from ibr.render import view_synthesis
 
     cams = [g.camera for g in truths]
@@ -347,8 +347,9 @@ def quantized_supersampled(name, exact, codes, quantization, truths):
     fresh = [View(v.color, v.depth, v.camera, v.name) for v in codes]  # new views: nothing cached on them
     with mock.patch.object(view_synthesis, "_with_mesh_depth", lambda view, mesh: view):
         before = score(fresh, mesh_options={"quantization": quantization})
+    p_mm = score(mm, mesh_options={"quantization": DepthQuantization.codes(0.001)})
     print(f"{name:<8} {'supersample 3: exact / 8-bit from fitted planes / from codes':<64} {p0:.2f} / {p:.2f} "
-          f"({p - p0:+.2f}) / {before:.2f} ({before - p0:+.2f})")
+          f"({p - p0:+.2f}) / {before:.2f} ({before - p0:+.2f}); 16-bit mm {p_mm:.2f} ({p_mm - p0:+.2f})")
 
 
 def motorcycle_rounded_disparity():
