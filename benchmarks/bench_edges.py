@@ -345,7 +345,7 @@ def quantized_supersampled(name, exact, codes, quantization, truths, mm):
 
     p0, p = score(exact), score(codes, mesh_options={"quantization": quantization})
     fresh = [View(v.color, v.depth, v.camera, v.name) for v in codes]  # new views: nothing cached on them
-    with mock.patch.object(view_synthesis, "_with_mesh_depth", lambda view, mesh: view):
+    with mock.patch.object(view_synthesis, "_with_mesh_depth", lambda view, mesh, *partner: view):
         before = score(fresh, mesh_options={"quantization": quantization})
     p_mm = score(mm, mesh_options={"quantization": DepthQuantization.codes(0.001)})
     print(f"{name:<8} {'supersample 3: exact / 8-bit from fitted planes / from codes':<64} {p0:.2f} / {p:.2f} "

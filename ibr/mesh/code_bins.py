@@ -44,7 +44,7 @@ from .quad_mesh import QuadMesh, _inv_depth, _rect_areas
 
 __all__ = ["ACCEPT_CODES", "DEQUANTIZE_ITERATIONS", "GROW", "ITERATIONS", "MAX_WINDOW_PIXELS", "REJECT_AFTER",
            "REJECT_CODES", "RIDGE", "SPLIT_SHARE", "SURFACE_STEP_CODES", "depth_in_code_bins", "fit_mesh_in_code_bins",
-           "fit_planes_in_code_bins"]
+           "fit_planes_in_code_bins", "partner_code_bins"]
 
 #: Pixels up to this many 4-connected steps from a quad inform its surface (10 px: clutter
 #: -0.297 dB, room -0.223; with the plane rather than the surface tested, 8 / 10 / 12 px gave
@@ -107,7 +107,7 @@ def fit_planes_in_code_bins(mesh: QuadMesh, depth, quads=None) -> tuple[np.ndarr
     return planes, fitted
 
 
-def depth_in_code_bins(start, codes, quantization: DepthQuantization, *,
+def depth_in_code_bins(start, codes, quantization: DepthQuantization, *, also_within=None,
                        iterations: int = DEQUANTIZE_ITERATIONS) -> np.ndarray:
     """Per-pixel depth inside each pixel's code bin, smooth within surfaces, from a start.
 
@@ -121,7 +121,8 @@ def depth_in_code_bins(start, codes, quantization: DepthQuantization, *,
 
     Measured (8-bit disparity of the bundled pairs, ``interpolate(..., supersample=3)``, covered
     pixels, against the exact depth's; the start the sources' fitted meshes,
-    :mod:`ibr.render.plane_refine`): clutter -1.12 -> -0.85 dB, room -0.52 -> -0.21; clamping the
+    :mod:`ibr.render.plane_refine`): clutter -1.12 -> -0.85 dB, room -0.52 -> -0.21 (with the
+    partner source's codes as ``also_within``, :func:`partner_code_bins`: -0.72 / -0.14); clamping the
     planes into the bins alone -0.99 / -0.38; the plain 4-neighbour mean (planes bent at their
     borders) pushed the depth-edge pixels' errors up. The real motorcycle's disparity rounded to
     integers, planes fitted to the right view's colour as the start: 0.197 -> 0.166 px rms
@@ -138,6 +139,11 @@ def depth_in_code_bins(start, codes, quantization: DepthQuantization, *,
         The stored (quantized) planar depth, as decoded (scene units); NaN, 0 or inf where none.
     quantization : DepthQuantization
         The encoding's step (:class:`ibr.base.depth.DepthQuantization`).
+    also_within : (lo, hi), optional
+        Further bounds on each pixel's inverse depth (1 / scene units, (H, W) each, NaN where
+        none), e.g. another view's codes (:func:`partner_code_bins`), intersected with the
+        pixel's bin wherever the two overlap (elsewhere the bin alone: the other view sees
+        another surface there).
     iterations : int
         Rounds of smoothing and projection, >= 0 (0: the start moved into the bins).
 
@@ -158,6 +164,8 @@ def depth_in_code_bins(start, codes, quantization: DepthQuantization, *,
     valid = np.isfinite(guide) & np.isfinite(qc)
     step = quantization.inv_step(np.where(valid, qc, 0.0))
     lo, hi = np.where(valid, qc - 0.5 * step, 0.0), np.where(valid, qc + 0.5 * step, 0.0)
+    if also_within is not None:
+        lo, hi = _intersected(lo, hi, also_within, start.shape)
     pairs = _surface_pairs(np.where(valid, guide, np.nan), DEQUANTIZE_SURFACE_CODES * step)
     q = np.clip(np.where(valid, guide, 0.0), lo, hi)
     count = sum(p.astype(np.float64) for p in pairs)
@@ -169,6 +177,94 @@ def depth_in_code_bins(start, codes, quantization: DepthQuantization, *,
         q = np.clip(np.where(smoothed, 0.5 * total / np.maximum(count, 1.0), q), lo, hi)
     with np.errstate(divide="ignore"):
         return np.where(valid, 1.0 / np.where(valid, q, 1.0), start).astype(np.float32)
+
+
+def _intersected(lo, hi, bounds, shape) -> tuple[np.ndarray, np.ndarray]:
+    """The bins ``(lo, hi)`` narrowed to ``bounds`` where the two overlap."""
+    if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
+        raise TypeError(f"also_within: expected a pair (lo, hi) of arrays, got {type(bounds).__name__}")
+    b_lo, b_hi = (check_array(f"also_within[{i}]", b, shape=shape, dtype_kind="f") for i, b in enumerate(bounds))
+    new_lo, new_hi = np.fmax(lo, b_lo), np.fmin(hi, b_hi)  # fmax / fmin: NaN bounds leave the bin
+    overlap = new_lo <= new_hi
+    return np.where(overlap, new_lo, lo), np.where(overlap, new_hi, hi)
+
+
+def partner_code_bins(camera, start, partner, quantization: DepthQuantization | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on the inverse depth of ``camera``'s pixels from the codes of another view.
+
+    Each pixel's point (on its ray at the ``start`` depth) lands on a pixel of ``partner``, whose
+    code holds the surface's depth there to half a code: a second, staggered sampling of the
+    same surface, whose codes change at other places than the pixel's own. The partner's bin,
+    carried back along the pixel's ray (the inverse depth in the partner's frame, ``q / w_2``,
+    is monotonic along the ray), is widened by half a pixel's change of ``start`` on its surface
+    (the partner's pixel centre lies up to half a pixel from the point).
+
+    Parameters
+    ----------
+    camera : Camera
+        The camera of ``start``.
+    start : (H, W) float array
+        Planar depth of ``camera``'s pixels (scene units) that places the points; NaN, 0 or
+        inf where none.
+    partner : View
+        The other view, with its stored (quantized) depth.
+    quantization : DepthQuantization, optional
+        The step of ``partner``'s codes; default the one it records
+        (:func:`ibr.base.depth.quantization_of`), required one way or the other.
+
+    Returns
+    -------
+    lo, hi : (H, W) float64
+        Inverse depth (1 / scene units) in ``camera``'s frame; NaN where the point falls outside
+        the partner, behind it, or on a pixel without depth. For
+        :func:`depth_in_code_bins`'s ``also_within``.
+    """
+    from ..base.camera import Camera
+    from ..base.depth import quantization_of
+    from ..base.view import View
+
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera: expected an ibr Camera, got {type(camera).__name__}")
+    if not isinstance(partner, View):
+        raise TypeError(f"partner: expected an ibr View, got {type(partner).__name__}")
+    partner.require_depth("partner_code_bins")
+    quant = quantization_of(partner) if quantization is None else quantization
+    if not isinstance(quant, DepthQuantization):
+        raise (TypeError if quantization is not None else ValueError)(
+            f"quantization: expected an ibr.base.depth.DepthQuantization (the step of partner's codes), got "
+            f"{type(quantization).__name__ if quantization is not None else 'None, and partner records none'}")
+    q = _inv_depth(check_array("start", start, shape=(camera.height, camera.width), dtype_kind="f"))
+    m = partner.camera.cam_from_world @ camera.world_from_cam  # the partner's frame from the camera's
+    a = partner.camera.K @ m[:3, :3] @ np.linalg.inv(camera.K)
+    s = partner.camera.K @ m[:3, 3]
+    v, u = np.mgrid[0:camera.height, 0:camera.width].astype(np.float64)
+    ax = [a[i, 0] * u + a[i, 1] * v + a[i, 2] for i in range(3)]  # w = A x + s q (homogeneous, times q)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w2 = ax[2] + s[2] * q
+        pu, pv = np.rint((ax[0] + s[0] * q) / w2), np.rint((ax[1] + s[1] * q) / w2)
+        seen = (w2 > 0) & (pu >= 0) & (pu < partner.camera.width) & (pv >= 0) & (pv < partner.camera.height)
+    iu, iv = (np.where(seen, c, 0).astype(np.intp) for c in (pu, pv))
+    qp = np.where(seen, _inv_depth(partner.depth)[iv, iu], np.nan)
+    half = 0.5 * quant.inv_step(np.nan_to_num(qp))
+    widen = 0.5 * _surface_change(q)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        # q_partner = q / (ax2 + s2 q)  <=>  q = q_partner ax2 / (1 - q_partner s2)
+        ends = [(qp + sign * half) * ax[2] / (1 - (qp + sign * half) * s[2]) for sign in (-1, 1)]
+        lo, hi = np.fmin(*ends) - widen, np.fmax(*ends) + widen
+        ok = np.isfinite(lo) & np.isfinite(hi) & (lo > 0)
+    return np.where(ok, lo, np.nan), np.where(ok, hi, np.nan)
+
+
+def _surface_change(q) -> np.ndarray:
+    """(H, W): the change of ``q`` over one pixel along u plus along v, each the smaller of the
+    two one-sided differences (the one on the pixel's own surface beside a depth edge); 0 where
+    a pixel has no neighbour along an axis."""
+    total = np.zeros(q.shape)
+    padded = np.pad(q, 1, constant_values=np.nan)
+    with np.errstate(invalid="ignore"):
+        for before, after in ((padded[1:-1, :-2], padded[1:-1, 2:]), (padded[:-2, 1:-1], padded[2:, 1:-1])):
+            total += np.nan_to_num(np.fmin(np.abs(q - before), np.abs(after - q)))
+    return total
 
 
 def _surface_pairs(guide, tolerance) -> tuple[np.ndarray, np.ndarray]:

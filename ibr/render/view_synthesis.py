@@ -166,15 +166,23 @@ class _Source:
             v = self._upsampled[k] = _with_mixed_radius(self._upsample(k), k)
         return set_quantization(v, quantization_of(self._view()))  # as the view's is now (it may have been set since)
 
-    def _upsample(self, k: int, refined_key=None, clean_start: bool = False) -> View:
+    def _upsample(self, k: int, refined_key=None, clean_start: bool = False, partner_key=None) -> View:
         """:func:`~ibr.render.upsample.upsample_view` of the source, or with ``refined_key`` (the
         options of a mesh of this source refined against its partner, :func:`_with_partners`) of
-        the source with that mesh's depth instead of its stored codes (:func:`_upsampled_pair`);
+        the source with that mesh's depth instead of its stored codes (:func:`_upsampled_pair`;
+        ``partner_key``: the partner's, whose quantization its codes' bins take);
         ``clean_start`` for a colour its partner refines."""
         from .upsample import upsample_view
 
         view = self._view()
-        source = view if refined_key is None else _with_mesh_depth(view, source_mesh(view, **dict(refined_key)))
+        if refined_key is None:
+            source = view
+        else:
+            options = dict(refined_key)
+            partner = options[_PARTNER]()
+            quant = dict(partner_key).get("quantization") if partner_key is not None else None
+            source = _with_mesh_depth(view, source_mesh(view, **options), partner,
+                                      quant if quant is not None else quantization_of(partner))
         return upsample_view(source, k, clean_start=clean_start)
 
     def upsampled_with(self, partner: View, k: int, refined_key=None, partner_key=None) -> View:
@@ -188,7 +196,7 @@ class _Source:
         other.drop_dead_partners()
         key, key_other = (k, refined_key, weakref.ref(partner), partner_key), (k, partner_key, self._view, refined_key)
         if key not in self._upsampled or key_other not in other._upsampled:
-            ups = (self._upsample(k, refined_key, clean_start=True), other._upsample(k, partner_key, clean_start=True))
+            ups = (self._upsample(k, refined_key, True, partner_key), other._upsample(k, partner_key, True, refined_key))
             colours = super_resolve_pair((view, partner), ups, k)
             refined = [_with_mixed_radius(View(c, u.depth, u.camera, u.name), k) for c, u in zip(colours, ups)]
             self._upsampled[key], other._upsampled[key_other] = refined
@@ -908,10 +916,10 @@ def _upsampled_pair(view_a, view_b, mesh_options: dict, lod: str, method: str, k
     """The two sources at k x k their resolution, their colours refined by each other
     (:meth:`_Source.upsampled_with`). A source in coarse codes (:func:`_with_partners`) is
     upsampled from the depth of its mesh refined against the other source
-    (:mod:`ibr.render.plane_refine`), moved into its codes' bins, rather than from its codes
-    (8-bit disparity, ``supersample=3``, against the exact depth's: clutter -1.94 -> -0.85 dB,
-    room -1.91 -> -0.21; docs/edges.md section 3); its upsampled meshes still allow for the
-    codes' quantization."""
+    (:mod:`ibr.render.plane_refine`), moved into its codes' bins and its partner's, rather than
+    from its codes (8-bit disparity, ``supersample=3``, against the exact depth's: clutter -1.94
+    -> -0.72 dB, room -1.91 -> -0.14; docs/edges.md section 3); its upsampled meshes still allow
+    for the codes' quantization."""
     keys = (None, None)
     if method == "mesh":
         # the fitted meshes of the whole pair's span (one upsampled view per source and partner, whatever the frames)
@@ -921,17 +929,22 @@ def _upsampled_pair(view_a, view_b, mesh_options: dict, lod: str, method: str, k
             _source(view_b).upsampled_with(view_a, k, keys[1], keys[0]))
 
 
-def _with_mesh_depth(view: View, mesh) -> View:
+def _with_mesh_depth(view: View, mesh, partner: View | None = None, partner_quantization=None) -> View:
     """``view`` with the depth of ``mesh``'s planes where its stored depth is valid (the stored
     depth kept where a plane gives none), moved into the bins of its codes where the mesh has a
-    quantization (:func:`~ibr.mesh.code_bins.depth_in_code_bins`)."""
-    from ..mesh.code_bins import depth_in_code_bins
+    quantization (:func:`~ibr.mesh.code_bins.depth_in_code_bins`), and of ``partner``'s codes
+    where ``partner_quantization`` is given (:func:`~ibr.mesh.code_bins.partner_code_bins`)."""
+    from ..mesh.code_bins import depth_in_code_bins, partner_code_bins
     from ..mesh.quad_mesh import mesh_depth
 
     with np.errstate(invalid="ignore"):
         planes = mesh_depth(mesh)
-        if mesh.info.get("quantization") is not None:
-            planes = depth_in_code_bins(planes, view.depth, mesh.info["quantization"])
+        quant = mesh.info.get("quantization")
+        if quant is not None:
+            bounds = None
+            if partner is not None and partner_quantization is not None:
+                bounds = partner_code_bins(view.camera, planes, partner, partner_quantization)
+            planes = depth_in_code_bins(planes, view.depth, quant, also_within=bounds)
         valid = np.isfinite(view.depth) & (view.depth > 0)
         depth = np.where(valid & np.isfinite(planes) & (planes > 0), planes, view.depth).astype(np.float32)
     return View(view.color, depth, view.camera, view.name)
