@@ -38,8 +38,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..base.depth import DepthQuantization
+from ..base.camera import Camera
+from ..base.depth import DepthQuantization, quantization_of
 from ..base.validate import check_array, check_finite_scalar
+from ..base.view import View
 from .quad_mesh import QuadMesh, _inv_depth, _rect_areas
 
 __all__ = ["ACCEPT_CODES", "DEQUANTIZE_ITERATIONS", "GROW", "ITERATIONS", "MAX_WINDOW_PIXELS", "REJECT_AFTER",
@@ -122,8 +124,8 @@ def depth_in_code_bins(start, codes, quantization: DepthQuantization, *, also_wi
     Measured (8-bit disparity of the bundled pairs, ``interpolate(..., supersample=3)``, covered
     pixels, against the exact depth's; the start the sources' fitted meshes,
     :mod:`ibr.render.plane_refine`): clutter -1.12 -> -0.85 dB, room -0.52 -> -0.21 (with the
-    partner source's codes as ``also_within``, :func:`partner_code_bins`: -0.72 / -0.14); clamping the
-    planes into the bins alone -0.99 / -0.38; the plain 4-neighbour mean (planes bent at their
+    partner source's codes as ``also_within``, :func:`partner_code_bins`: -0.72 / -0.14);
+    clamping the planes into the bins alone -0.99 / -0.38; the plain 4-neighbour mean (planes bent at their
     borders) pushed the depth-edge pixels' errors up. The real motorcycle's disparity rounded to
     integers, planes fitted to the right view's colour as the start: 0.197 -> 0.166 px rms
     against the float ground truth.
@@ -189,12 +191,15 @@ def _intersected(lo, hi, bounds, shape) -> tuple[np.ndarray, np.ndarray]:
     return np.where(overlap, new_lo, lo), np.where(overlap, new_hi, hi)
 
 
-def partner_code_bins(camera, start, partner, quantization: DepthQuantization | None = None) -> tuple[np.ndarray, np.ndarray]:
+def partner_code_bins(camera: Camera, start, partner: View,
+                      quantization: DepthQuantization | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Bounds on the inverse depth of ``camera``'s pixels from the codes of another view.
 
     Each pixel's point (on its ray at the ``start`` depth) lands on a pixel of ``partner``, whose
-    code holds the surface's depth there to half a code: a second, staggered sampling of the
-    same surface, whose codes change at other places than the pixel's own. The partner's bin,
+    code holds the surface's depth there to half a code in the partner's frame. Where that depth
+    is another function of the surface than the pixel's own (cameras that verge or move in
+    depth; a rectified pair codes the same disparity twice and adds nothing), its codes change
+    at other places on the surface and narrow the pixel's bin. The partner's bin,
     carried back along the pixel's ray (the inverse depth in the partner's frame, ``q / w_2``,
     is monotonic along the ray), is widened by half a pixel's change of ``start`` on its surface
     (the partner's pixel centre lies up to half a pixel from the point).
@@ -219,10 +224,6 @@ def partner_code_bins(camera, start, partner, quantization: DepthQuantization | 
         the partner, behind it, or on a pixel without depth. For
         :func:`depth_in_code_bins`'s ``also_within``.
     """
-    from ..base.camera import Camera
-    from ..base.depth import quantization_of
-    from ..base.view import View
-
     if not isinstance(camera, Camera):
         raise TypeError(f"camera: expected an ibr Camera, got {type(camera).__name__}")
     if not isinstance(partner, View):

@@ -18,7 +18,7 @@ otherwise the quad keeps its plane (weak texture along the epipolar lines, occlu
 quads), and it and every quad not fitted to the colour get the plane the bins of the codes
 around them allow (:mod:`ibr.mesh.code_bins`). ``interpolate`` fits its two sources to each
 other; when it supersamples, it upsamples a coarse source from the depth of its fitted mesh moved
-into the codes' bins pixel by pixel (:func:`ibr.mesh.code_bins.depth_in_code_bins`).
+into its codes' bins and its partner's pixel by pixel (:func:`ibr.mesh.code_bins.depth_in_code_bins`).
 
 Measured (``python benchmarks/bench_edges.py --quick``, section 3: 8-bit disparity against the
 exact depth, covered pixels, t = .25/.5/.75): room -0.40 -> -0.25 dB, clutter -0.71 -> -0.56;
