@@ -60,7 +60,7 @@ import cv2  # noqa: E402
 from scipy import ndimage  # noqa: E402
 
 from benchmarks._timing import median_ms, paired_ms  # noqa: E402
-from ibr.base.depth import DepthQuantization  # noqa: E402
+from ibr.base.depth import DepthQuantization, fixed_from_z, z_from_fixed  # noqa: E402
 from ibr.base.view import View  # noqa: E402
 from ibr.io import load_view  # noqa: E402
 from ibr.mesh import build_mesh, code_bins  # noqa: E402
@@ -348,8 +348,13 @@ def quantized_supersampled(name, exact, codes, quantization, truths, mm):
     with mock.patch.object(view_synthesis, "_with_mesh_depth", lambda view, mesh, *partner: view):
         before = score(fresh, mesh_options={"quantization": quantization})
     p_mm = score(mm, mesh_options={"quantization": DepthQuantization.codes(0.001)})
+    near, far = 0.003, 1e6  # a coarse 16-bit z-buffer: a code is about 4.6 cm at 3 m
+    zbuffer = [View(v.color, z_from_fixed(fixed_from_z(v.depth, near=near, far=far, bits=16), near=near, far=far,
+                                          bits=16).astype(np.float32), v.camera, v.name) for v in exact]
+    p_zb = score(zbuffer, mesh_options={"quantization": DepthQuantization.zbuffer(near=near, far=far, bits=16)})
     print(f"{name:<8} {'supersample 3: exact / 8-bit from fitted planes / from codes':<64} {p0:.2f} / {p:.2f} "
-          f"({p - p0:+.2f}) / {before:.2f} ({before - p0:+.2f}); 16-bit mm {p_mm:.2f} ({p_mm - p0:+.2f})")
+          f"({p - p0:+.2f}) / {before:.2f} ({before - p0:+.2f}); 16-bit mm {p_mm:.2f} ({p_mm - p0:+.2f}); "
+          f"16-bit z-buffer {p_zb:.2f} ({p_zb - p0:+.2f})")
 
 
 def motorcycle_rounded_disparity():
