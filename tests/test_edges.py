@@ -362,6 +362,56 @@ def test_pullpush_fill_has_no_streaks():
         fill_pullpush(col, z, holes, axis=2)
 
 
+@pytest.mark.parametrize("dtype, scale", [(np.uint8, 1), (np.uint16, 257), (np.float32, 1 / 255)])
+def test_a_strip_no_source_sees_inside_a_shading_ramp_is_filled_along_the_ramp(dtype, scale, monkeypatch):
+    """The strip beside a thin pole that neither source sees (clutter at t = 0.75, inside the
+    chin's shading): a 5 px hole run in a wall at one depth whose colour falls 7 levels per pixel
+    across it is the line between its neighbours, within a level of the ramp in every dtype; the
+    directional fill alone copied the farther neighbour (up to 35 levels off) and its half of the
+    pull-push left the run flat. A step in depth at the run, or a texture (colour not changing at
+    the pace it changes across the run), keeps the background fill as it was."""
+    h, w = 24, 40
+    u = np.arange(w, dtype=np.float64)
+    ramp = np.broadcast_to((200 - 7 * u)[None, :, None], (h, w, 3)) * scale
+    z = np.full((h, w), 4.96, np.float32)
+    holes = np.zeros((h, w), bool)
+    holes[:, 18:23] = True
+    color = ramp.astype(dtype)
+    filled, depth, f = fill_pullpush(color, np.where(holes, np.nan, z).astype(np.float32), holes, axis=0)
+    assert f[holes].all()
+    np.testing.assert_allclose(filled[holes].astype(float), ramp[holes], atol=1.01 * scale)
+    np.testing.assert_allclose(depth[holes], 4.96, rtol=1e-5)
+    # a nearer surface on one side: not one surface, the background side as before
+    z_step = z.copy()
+    z_step[:, :18] = 2.0
+    step, _, _ = fill_pullpush(color, np.where(holes, np.nan, z_step).astype(np.float32), holes, axis=0)
+    assert np.abs(step[holes].astype(float) - ramp[holes]).max() > 5 * scale
+    # a texture: each row's run the same as with the ramp rule off
+    texture = bg_texture(h, w, seed=7).astype(dtype) if dtype == np.uint8 else None
+    if texture is not None:
+        got, _, _ = fill_pullpush(texture, np.where(holes, np.nan, z).astype(np.float32), holes, axis=0)
+        monkeypatch.setattr("ibr.render.fill.RAMP_REL", -1.0)  # the ramp rule off
+        want, _, _ = fill_pullpush(texture, np.where(holes, np.nan, z).astype(np.float32), holes, axis=0)
+        np.testing.assert_array_equal(got, want)
+
+
+def test_the_farthest_covered_depth_is_numpy_s_masked_maximum():
+    """The fill's reference depth in one pass: the maximum over the pixels outside the holes of
+    the finite, positive depths, 0 where there is none (NaN, inf, negative, all holes)."""
+    from ibr.render._fill_kernels import covered_max_depth
+
+    rng = np.random.default_rng(11)
+    for _ in range(100):
+        h, w = rng.integers(1, 20, 2)
+        z = rng.uniform(-1, 10, (h, w)).astype(np.float32)
+        z[rng.random((h, w)) < 0.2] = np.nan
+        z[rng.random((h, w)) < 0.1] = np.inf
+        holes = rng.random((h, w)) < 0.4
+        want = float(np.max(z, where=~holes & (z > 0) & (z < np.inf), initial=0.0))
+        assert float(covered_max_depth(z, holes)) == want
+    assert covered_max_depth(np.full((3, 3), 5.0, np.float32), np.ones((3, 3), bool)) == 0.0
+
+
 def test_parallax_axis_follows_the_camera_move():
     c = cam()
     up = np.eye(4)

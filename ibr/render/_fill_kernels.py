@@ -334,14 +334,30 @@ def binomial3(src, need, out):
                     + 0.125 * (src[v0, u, k] + src[v2, u, k] + src[v, u0, k] + src[v, u2, k]) + 0.25 * src[v, u, k]
 
 
+@njit(cache=True, nogil=True)
+def covered_max_depth(depth, holes):
+    """The farthest finite, positive depth of the pixels outside ``holes``; 0.0 if there is none
+    (the maximum of ``depth`` where ``~holes & (depth > 0) & (depth < inf)``, in one pass)."""
+    best = depth.dtype.type(0.0)
+    h, w = depth.shape
+    for v in range(h):
+        for u in range(w):
+            z = depth[v, u]
+            x = z if z < np.inf and not holes[v, u] else depth.dtype.type(0.0)  # NaN, inf, a hole: 0
+            best = x if x > best else best  # selects, no branches: 0.26 ms against 0.34 at 741 x 500
+    return best
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
-def axis_background(color, depth, holes, out, ok, out_z, max_run):
+def axis_background(color, depth, holes, out, ok, out_z, ramp, max_run, min_ramp_run, ramp_rel, ramp_slope, is_int):
     """Directional background fill of the hole pixels along rows (pass transposed views for
     columns): each run of hole pixels takes the colour of the farther of its two covered
     neighbours on the row (the only one at the border). Writes ``out`` and ``ok`` at hole pixels
     only, and ``out_z``: the depth of the colour's source for runs of at most ``max_run`` pixels,
     +inf for longer runs (their source is never second-guessed); a row without any covered
-    pixel stays ``ok = False``."""
+    pixel stays ``ok = False``. A run of ``min_ramp_run`` to ``max_run`` pixels inside a ramp of
+    one surface (:func:`_inside_a_ramp`) takes the line between its two neighbours instead, colour
+    and depth, and is marked in ``ramp``."""
     h, w, nc = color.shape
     for v in range(h):
         j = 0
@@ -354,6 +370,10 @@ def axis_background(color, depth, holes, out, ok, out_z, max_run):
                 j += 1
             left = a - 1
             right = j if j < w else -1
+            if min_ramp_run <= j - a <= max_run and _inside_a_ramp(color, depth, holes, v, left, right, ramp_rel,
+                                                                 ramp_slope):
+                _write_ramp(color, depth, out, ok, out_z, ramp, v, a, j, is_int)
+                continue
             src = -1
             if left >= 0 and right >= 0:
                 src = left if depth[v, left] >= depth[v, right] else right
@@ -370,11 +390,52 @@ def axis_background(color, depth, holes, out, ok, out_z, max_run):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, direct_z, gate, is_int, filled):
+def _write_ramp(color, depth, out, ok, out_z, ramp, v, a, j, is_int):
+    """The hole run ``a .. j-1`` of row ``v`` as the line between its neighbours ``a - 1`` and
+    ``j`` (colour rounded for integer images, and depth), marked in ``ramp``."""
+    left, n = a - 1, j - a + 1
+    for k in range(a, j):
+        f = (k - left) / n
+        ok[v, k] = True
+        ramp[v, k] = True
+        out_z[v, k] = (1.0 - f) * depth[v, left] + f * depth[v, j]
+        for c in range(color.shape[2]):
+            x = (1.0 - f) * np.float64(color[v, left, c]) + f * np.float64(color[v, j, c])
+            out[v, k, c] = np.floor(x + 0.5) if is_int else x
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _inside_a_ramp(color, depth, holes, v, left, right, rel, slope):
+    """Whether the hole run between the covered pixels ``left`` and ``right`` of row ``v`` lies
+    inside a ramp of one surface: both neighbours within ``rel`` of each other in depth, and the
+    colour changing across the run at the pace it changes just outside it (the covered pixels
+    beyond each neighbour), within ``slope`` per pixel in every channel. A thin object's double
+    disocclusion (a strip that neither source sees) inside a smooth shading is such a run; a
+    real image's runs between two samples of one depth mostly are not (the motorcycle's)."""
+    if left < 1 or right < 0 or right > color.shape[1] - 2:
+        return False
+    zl, zr = depth[v, left], depth[v, right]
+    if not abs(zl - zr) <= rel * min(zl, zr) or holes[v, left - 1] or holes[v, right + 1]:
+        return False
+    n = right - left
+    for c in range(color.shape[2]):
+        across = (np.float64(color[v, right, c]) - np.float64(color[v, left, c])) / n
+        before = np.float64(color[v, left, c]) - np.float64(color[v, left - 1, c])
+        after = np.float64(color[v, right + 1, c]) - np.float64(color[v, right, c])
+        if abs(before - across) > slope or abs(after - across) > slope:
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, direct_z, ramp, ramp_lines, ramp_mix, gate,
+              is_int, filled):
     """Last push step, fused with the write: every hole pixel takes the bilinear upsampling of
     level 1's values (it has no weight of its own), colour mixed as ``(1 - mix) * pushed + mix
     * direct`` where the directional background fill exists and its source lies at least at
-    ``gate`` times the pushed depth (``direct_z``); depth from the pull-push."""
+    ``gate`` times the pushed depth (``direct_z``); where it is a ramp's line (``ramp``) with
+    ``ramp_mix`` of the line's unsmoothed colour (``ramp_lines``) instead; depth from the
+    pull-push."""
     h, w, nc = color.shape
     hc, wc = coarse_val.shape[0], coarse_val.shape[1]
     for v in range(h):
@@ -386,11 +447,15 @@ def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, direct_z,
             z = _up(coarse_val, cv, cu, ov, ou, nc)
             if not (z > 0.0):
                 continue
-            d = direct_ok[v, u] and direct_z[v, u] >= gate * z
+            on_ramp = direct_ok[v, u] and ramp[v, u]
+            d = on_ramp or (direct_ok[v, u] and direct_z[v, u] >= gate * z)
+            m = ramp_mix if on_ramp else mix
             for k in range(nc):
                 x = _up(coarse_val, cv, cu, ov, ou, k)
-                if d:
-                    x = (1.0 - mix) * x + mix * np.float32(direct[v, u, k])
+                if on_ramp:
+                    x = (1.0 - m) * x + m * np.float32(ramp_lines[v, u, k])
+                elif d:
+                    x = (1.0 - m) * x + m * np.float32(direct[v, u, k])
                 if is_int:
                     x = np.floor(x + 0.5)
                 color[v, u, k] = x
