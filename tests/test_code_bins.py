@@ -537,7 +537,8 @@ def _plane_pair(plane, partner_position):
 @pytest.mark.parametrize("plane", [(0.0006, 0.0002, 0.203), (0.0, 0.0, 0.2047), (-0.0004, 0.0007, 0.23)])
 def test_partner_code_bins_hold_the_surface(plane, position):
     """The partner's bins carried back along each ray contain the true inverse depth wherever the
-    partner sees the point (placed at the true depth), about one of its codes wide: (1 - t_z q)^2 of this camera's (0.63-1.08 here)."""
+    partner sees the point (placed at the true depth), about one of its codes wide: (1 - t_z q)^2
+    of this camera's (0.63-1.08 here)."""
     camera, q, _, partner = _plane_pair(plane, position)
     lo, hi = code_bins.partner_code_bins(camera, (1 / q).astype(np.float32), partner, QUANT)
     seen = np.isfinite(lo)
