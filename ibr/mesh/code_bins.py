@@ -230,15 +230,17 @@ def partner_code_bins(camera: Camera, start, partner: View,
         raise TypeError(f"partner: expected an ibr View, got {type(partner).__name__}")
     partner.require_depth("partner_code_bins")
     quant = quantization_of(partner) if quantization is None else quantization
+    if quant is None:
+        raise ValueError("quantization: expected an ibr.base.depth.DepthQuantization (the step of partner's codes), "
+                         "got None, and partner records none")
     if not isinstance(quant, DepthQuantization):
-        raise (TypeError if quantization is not None else ValueError)(
-            f"quantization: expected an ibr.base.depth.DepthQuantization (the step of partner's codes), got "
-            f"{type(quantization).__name__ if quantization is not None else 'None, and partner records none'}")
+        raise TypeError(f"quantization: expected an ibr.base.depth.DepthQuantization (the step of partner's codes), "
+                        f"got {type(quant).__name__}")
     q = _inv_depth(check_array("start", start, shape=(camera.height, camera.width), dtype_kind="f"))
     m = partner.camera.cam_from_world @ camera.world_from_cam  # the partner's frame from the camera's
     a = partner.camera.K @ m[:3, :3] @ np.linalg.inv(camera.K)
     s = partner.camera.K @ m[:3, 3]
-    v, u = np.mgrid[0:camera.height, 0:camera.width].astype(np.float64)
+    u, v = camera.pixel_grid()
     ax = [a[i, 0] * u + a[i, 1] * v + a[i, 2] for i in range(3)]  # w = A x + s q (homogeneous, times q)
     with np.errstate(invalid="ignore", divide="ignore"):
         w2 = ax[2] + s[2] * q

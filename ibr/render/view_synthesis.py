@@ -180,9 +180,8 @@ class _Source:
         else:
             options = dict(refined_key)
             partner = options[_PARTNER]()
-            quant = dict(partner_key).get("quantization") if partner_key is not None else None
             source = _with_mesh_depth(view, source_mesh(view, **options), partner,
-                                      quant if quant is not None else quantization_of(partner))
+                                      _quantization_in(dict(partner_key or ()), partner))
         return upsample_view(source, k, clean_start=clean_start)
 
     def upsampled_with(self, partner: View, k: int, refined_key=None, partner_key=None) -> View:
@@ -379,6 +378,13 @@ def _holds_dead_ref(key) -> bool:
     return isinstance(key, tuple) and any(_holds_dead_ref(k) for k in key)
 
 
+def _quantization_in(mesh_options: dict, view: View):
+    """The quantization of ``view``'s depth: the one ``mesh_options`` give, else the one
+    recorded on the view (:func:`~ibr.base.depth.quantization_of`), or None."""
+    quant = mesh_options.get("quantization")
+    return quant if quant is not None else quantization_of(view)
+
+
 def _with_partners(views, opts) -> list[dict]:
     """Each source's mesh options, plus :data:`_PARTNER` (the other source) where its depth's
     quantization is coarse over the pair's baseline (:func:`~ibr.render.plane_refine.is_coarse`,
@@ -387,8 +393,7 @@ def _with_partners(views, opts) -> list[dict]:
 
     out = []
     for view, o, other in zip(views, opts, views[::-1]):
-        quant = o.get("quantization")
-        quant = quant if quant is not None else quantization_of(view)
+        quant = _quantization_in(o, view)
         baseline = float(np.linalg.norm(view.camera.position - other.camera.position))
         coarse = is_coarse(quant, _median_depth_of(view), baseline, view.camera.fx)
         out.append({**o, _PARTNER: weakref.ref(other)} if coarse else o)
@@ -577,8 +582,7 @@ def _composite_maps(views, maps, weights, *, method, mesh_options, interpolation
     bicubic path; ``slots``: the keys of the float path's per-source scratch layers)."""
     keys = [_mesh_key(o) if method == "mesh" else None for o in mesh_options]
     use_trust = silhouettes and len(views) == 2
-    quant = [o.get("quantization") if o.get("quantization") is not None else quantization_of(v)
-             for v, o in zip(views, mesh_options)]
+    quant = [_quantization_in(o, v) for v, o in zip(views, mesh_options)]
     raw = [_source(v).raw for v in views]
     scale = SHARP_SCALE if interpolation == "sharp" else 1
     if interpolation != "cubic" and raw[0].dtype == np.uint8 and raw[0].shape[2] == 3 and np.dtype(dtype) == np.uint8:
