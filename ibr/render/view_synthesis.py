@@ -195,7 +195,8 @@ class _Source:
         other.drop_dead_partners()
         key, key_other = (k, refined_key, weakref.ref(partner), partner_key), (k, partner_key, self._view, refined_key)
         if key not in self._upsampled or key_other not in other._upsampled:
-            ups = (self._upsample(k, refined_key, True, partner_key), other._upsample(k, partner_key, True, refined_key))
+            ups = (self._upsample(k, refined_key, True, partner_key),
+                   other._upsample(k, partner_key, True, refined_key))
             colours = super_resolve_pair((view, partner), ups, k)
             refined = [_with_mixed_radius(View(c, u.depth, u.camera, u.name), k) for c, u in zip(colours, ups)]
             self._upsampled[key], other._upsampled[key_other] = refined
