@@ -513,6 +513,51 @@ def test_background_rim_beside_the_other_sources_pixels_is_marked_for_the_fill()
     np.testing.assert_array_equal(_rim_samples_beside_gaps(maps, [rim, rim]), expected)
 
 
+def test_a_clean_sample_beside_its_layer_s_gap_keeps_the_background_rim_s_colour_out():
+    """A one-layer sample between a clean background pixel (nearest) and the background rim,
+    within 2 px of its layer's gap, is the clean colour: the rim's foreground colour there is a
+    fainter second line beside the rim sample the fill recolours (the dotted line beside clutter's
+    left pole at t = 0.75, issue 11). Farther from the gap, or nearest to the rim, it is the
+    plain bilinear sample. The 8-bit path (with and without the 2 x 2 upsampled sources of sharp
+    sampling) and the float path alike."""
+    from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite, trust_channel
+    from ibr.render.rasterize import SourceMaps
+    from ibr.render.sharp_sampling import upsample_rgbt
+
+    z = np.full((5, 8), 4.0, np.float32)
+    z[:, 4:] = 1.0  # foreground on the right: column 3 is the background rim
+    rim = mixed_pixels(z, side="far")
+    trust = source_trust(z)
+    color = np.full((5, 8, 3), 30, np.uint8)
+    color[:, 3] = 120  # the rim mixes in the foreground's colour
+    color[:, 4:] = 200
+    h, w = 5, 8
+    rows = np.repeat(np.arange(h, dtype=np.float32)[:, None], w, 1)
+
+    def layer(cols, src_u):
+        u = np.full((h, w), -1e6, np.float32)
+        d = np.full((h, w), np.nan, np.float32)
+        u[:, cols], d[:, cols] = src_u, 4.0
+        return SourceMaps(u, np.where(np.isnan(d), np.float32(-1e6), rows), d, ~np.isnan(d))
+
+    # a covers target columns 0-4, column 5 is a hole, b covers 6-7 with clean background
+    maps = [layer([0, 1, 2, 3, 4], [2.4, 2.6, 1.0, 2.4, 2.4]), layer([6, 7], [0.0, 1.0])]
+    weights = np.array([0.5, 0.5])
+    packed = pack_trust(trust, rim)
+    up = upsample_rgbt(color, trust_channel(trust, z.shape))
+    got = {"float": [sample_composite([color, color], maps, weights, dtype=np.uint8, trust=t)
+                     for t in ([packed, packed], None)],
+           "8-bit": [remap_composite([rgbt_source(color, trust)] * 2, maps, weights, rims=r)
+                     for r in ([rim, rim], None)],
+           "8-bit 2x2": [remap_composite([up, up], maps, weights, rims=r, source_scale=2) for r in ([rim, rim], None)]}
+    for name, (comp, plain) in got.items():  # plain: without the silhouettes' trust and rims
+        c, p = comp.color[..., 0].astype(int), plain.color[..., 0].astype(int)
+        assert (p[:, 3:5] > 45).all() and (np.abs(c[:, 3:5] - 30) <= 2).all(), name  # rim trust 0.03
+        np.testing.assert_array_equal(c[:, :3], p[:, :3], err_msg=name)  # 5 px from the hole; the rim's own
+        assert (p[:, 1] > p[:, 0]).all() and (c[:, 2] == 30).all() and (c[:, 6:] == 30).all(), name
+        assert not comp.coverage[:, 5].any()
+
+
 def test_a_stray_sample_inside_a_hole_is_recoloured_and_a_lone_source_pixel_kept():
     """A far pixel beside a near block in the source (a depth outlier, as in real disparity maps)
     stays where it was when the camera moves, while the block moves 10 px away: alone in the

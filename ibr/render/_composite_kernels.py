@@ -181,6 +181,83 @@ def _beside_gap(z, v, u):
     return False
 
 
+#: A one-layer sample within this many pixels (4-connected) of its layer's gap does not take
+#: colour from its source's background rim (:func:`_rim_free_store`, :func:`_rim_free_resample`).
+RIM_FREE_GAP_PX = 2
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _near_gap(z, v, u, r):
+    """Whether a pixel up to ``r`` pixels from target pixel (v, u) along a row or column is not
+    covered by the layer of depths ``z`` (``_beside_gap`` for ``r`` = 1)."""
+    h, w = z.shape
+    for d in range(1, r + 1):
+        for dv, du in ((-d, 0), (d, 0), (0, -d), (0, d)):
+            y, x = v + dv, u + du
+            if 0 <= y < h and 0 <= x < w and not (z[y, x] > 0.0):
+                return True
+    return False
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _trust_weighted(ax, ay, t00, t01, t10, t11):
+    """Bilinear weights of taps (y0, x0), (y0, x1), (y1, x0), (y1, x1) scaled by their trust."""
+    return (np.float32((1 - ax) * (1 - ay) * t00), np.float32(ax * (1 - ay) * t01), np.float32((1 - ax) * ay * t10),
+            np.float32(ax * ay * t11))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _rim_free_store(src, k, z, x, y, out, v, u, is_int, maxval):
+    """Store the sample of src at (x, y) with its taps weighted by their trust (channel 0 of the
+    packed trust map ``k``) and return True, where it is a clean source pixel's sample (the
+    nearest tap clean) reaching into the background rim (a tap with the rim's negative flag in
+    channel 1) within :data:`RIM_FREE_GAP_PX` of its layer's gap (depths ``z``). There the rim's
+    colour mixes in a foreground that has moved away (a disocclusion that the other source
+    does not see either): the bilinear sample drew a second, fainter rim line beside the one
+    the fill recolours (issue 11, clutter t = 0.75, beside the left pole). False elsewhere
+    (nothing stored)."""
+    x0, x1, y0, y1, ax, ay = _taps(src, x, y)
+    if k[y0, x0, 1] >= 1.0 or k[y1 if ay >= 0.5 else y0, x1 if ax >= 0.5 else x0, 0] < 1.0:
+        return False  # four clean taps (their block minimum), or the nearest one mixed
+    if not (k[y0, x0, 1] < 0.0 or k[y0, x1, 1] < 0.0 or k[y1, x0, 1] < 0.0 or k[y1, x1, 1] < 0.0):
+        return False
+    if not _near_gap(z, v, u, RIM_FREE_GAP_PX):
+        return False
+    w00, w01, w10, w11 = _trust_weighted(ax, ay, k[y0, x0, 0], k[y0, x1, 0], k[y1, x0, 0], k[y1, x1, 0])
+    s = w00 + w01 + w10 + w11
+    for ch in range(out.shape[2]):
+        c = (w00 * np.float32(src[y0, x0, ch]) + w01 * np.float32(src[y0, x1, ch]) + w10 * np.float32(src[y1, x0, ch])
+             + w11 * np.float32(src[y1, x1, ch])) / s
+        _store(out, v, u, ch, c, is_int, maxval)
+    return True
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _rim_free_resample(orow, u, src, rims, z, v, x, y, scale):
+    """:func:`_rim_free_store` for the 8-bit path: ``src`` an (H_s, W_s, 4) colour + trust source
+    (upsampled ``scale`` x ``scale`` co-sited: its image pixel (i, j) is at (scale i, scale j)),
+    ``rims`` its (H_s, W_s) background rim; taps on the image's own pixels; into ``orow[u]``."""
+    h, w = src.shape[0] // scale, src.shape[1] // scale
+    fx0 = np.floor(x)
+    fy0 = np.floor(y)
+    ax = np.float32(x - fx0)
+    ay = np.float32(y - fy0)
+    i0, i1 = min(max(int(fx0), 0), w - 1), min(max(int(fx0) + 1, 0), w - 1)
+    j0, j1 = min(max(int(fy0), 0), h - 1), min(max(int(fy0) + 1, 0), h - 1)
+    if src[(j1 if ay >= 0.5 else j0) * scale, (i1 if ax >= 0.5 else i0) * scale, 3] < 255:
+        return
+    if not (rims[j0, i0] or rims[j0, i1] or rims[j1, i0] or rims[j1, i1]) or not _near_gap(z, v, u, RIM_FREE_GAP_PX):
+        return
+    x0, x1, y0, y1 = i0 * scale, i1 * scale, j0 * scale, j1 * scale
+    w00, w01, w10, w11 = _trust_weighted(ax, ay, np.float32(src[y0, x0, 3]), np.float32(src[y0, x1, 3]),
+                                         np.float32(src[y1, x0, 3]), np.float32(src[y1, x1, 3]))
+    s = w00 + w01 + w10 + w11
+    for ch in range(3):
+        c = (w00 * np.float32(src[y0, x0, ch]) + w01 * np.float32(src[y0, x1, ch]) + w10 * np.float32(src[y1, x0, ch])
+             + w11 * np.float32(src[y1, x1, ch])) / s
+        orow[u, ch] = np.uint8(min(c + np.float32(0.5), np.float32(255.0)))
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, quant0, quant2, is_int,
                       maxval, out, depth, coverage, use_trust, ka, kb, rim):
@@ -193,7 +270,8 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
     with the same bilinear taps where a block holds a mixed pixel. ``rim`` (H, W) bool receives,
     where only one layer covers a pixel, whether its nearest source pixel is on that source's
     background rim and a 4-neighbour is not covered by that layer (the rule of
-    ``composite.rim_beside_holes``: the fill recolours it; ``use_trust`` only, with two layers).
+    ``composite.rim_beside_holes``: the fill recolours it; ``use_trust`` only, with two layers);
+    near that gap, a clean pixel's sample keeps the rim's colour out (:func:`_rim_free_store`).
     Rows ``v0 .. v1-1`` only (serial, without the GIL: :func:`ibr.render.bands.run_bands` runs
     row bands on all cores)."""
     w, nc = out.shape[1], out.shape[2]
@@ -222,12 +300,14 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
                     depth[v, u] = b
                 coverage[v, u] = True
             elif has_a:
-                _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
+                if not (use_trust and _rim_free_store(sa, ka, za, ua[v, u], va[v, u], out, v, u, is_int, maxval)):
+                    _sample_store(sa, ua[v, u], va[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = a
                 coverage[v, u] = True
                 rim[v, u] = use_trust and _on_rim(ka, ua[v, u], va[v, u]) and _beside_gap(za, v, u)
             elif has_b:
-                _sample_store(sb, ub[v, u], vb[v, u], out, v, u, is_int, maxval)
+                if not (use_trust and _rim_free_store(sb, kb, zb, ub[v, u], vb[v, u], out, v, u, is_int, maxval)):
+                    _sample_store(sb, ub[v, u], vb[v, u], out, v, u, is_int, maxval)
                 depth[v, u] = b
                 coverage[v, u] = True
                 rim[v, u] = use_trust and _on_rim(kb, ub[v, u], vb[v, u]) and _beside_gap(zb, v, u)
@@ -240,13 +320,15 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant0, quant2, out, depth, coverage, use_trust,
-                   ra, ua, va, rb, ub, vb, rim, row0):
+                   ra, ua, va, rb, ub, vb, rim, row0, sa, sb, scale):
     """Two-layer composite of 8-bit layers that ``cv2.remap`` sampled from colour + trust sources
     ((H, W, 4) uint8: three colour channels, then the trust in 1/255, see
     ``composite.rgbt_source``); the rule of :func:`sample_composite2` with the trust read from
     channel 3. ``ra``, ``rb`` (H_s, W_s) bool: each source's background rim, looked up at the
     nearest source pixel of the maps (ua, va), (ub, vb) where only one layer covers a pixel and a
-    4-neighbour is not covered by that layer (``use_trust`` only). ``out`` (H, W, 3) uint8. Rows ``v0 .. v1-1``;
+    4-neighbour is not covered by that layer (``use_trust`` only); near that gap, a clean pixel's
+    sample is taken again from ``sa`` or ``sb`` (the sources, upsampled ``scale`` x ``scale``)
+    without the rim's colour (:func:`_rim_free_resample`). ``out`` (H, W, 3) uint8. Rows ``v0 .. v1-1``;
     ``la``, ``lb`` hold rows ``row0 ..`` only (a chunk of rows sampled just before)."""
     w = out.shape[1]
     for v in range(v0, v1):
@@ -289,6 +371,11 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
                 if use_trust and not (has_a and has_b):  # one layer: is it a rim beside its gap?
                     on_rim = _nearest(ra, ua[v, u], va[v, u]) if has_a else _nearest(rb, ub[v, u], vb[v, u])
                     rrow[u] = on_rim and _beside_gap(za if has_a else zb, v, u)
+                    if (lar[u, 3] if has_a else lbr[u, 3]) < 255:  # a mixed tap: the rim's colour kept out?
+                        if has_a:
+                            _rim_free_resample(orow, u, sa, ra, za, v, ua[v, u], va[v, u], scale)
+                        else:
+                            _rim_free_resample(orow, u, sb, rb, zb, v, ub[v, u], vb[v, u], scale)
             else:
                 orow[u, 0] = 0
                 orow[u, 1] = 0

@@ -513,7 +513,7 @@ def remap_composite(sources, maps, weights, *, mode: str = "blend", depth_tol: f
                 _remap_rows(src, m, r0, r1, dst[:r1 - r0], source_scale, work)
             _k.composite_rgbt(r0, r1, chunks[a], ma.depth, chunks[b], mb.depth, single, wa, wb, mode == "blend",
                               depth_tol, quant0, quant2, out, depth, coverage, use_trust, ra, ma.map_u, ma.map_v, rb,
-                              mb.map_u, mb.map_v, rim, r0)
+                              mb.map_u, mb.map_v, rim, r0, sources[a], sources[b], source_scale)
 
     run_bands(band, h)
     return Composite(out, depth, coverage, rim if use_trust and rim.any() else None)
