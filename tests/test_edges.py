@@ -513,6 +513,45 @@ def test_background_rim_beside_the_other_sources_pixels_is_marked_for_the_fill()
     np.testing.assert_array_equal(_rim_samples_beside_gaps(maps, [rim, rim]), expected)
 
 
+def test_two_rim_samples_each_beside_its_own_layer_s_gap_are_marked_for_the_fill():
+    """Where both layers see one surface through background-rim samples, each beside a pixel its
+    own layer does not cover, neither source has the surface's colour there (the dot at (74, 230)
+    beside clutter's left pole at t = 0.75): the fill recolours it, in the 8-bit, the float and
+    the bicubic paths alike. Where one of the two samples is clean, the blend keeps it."""
+    from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite
+    from ibr.render.rasterize import SourceMaps
+    from ibr.render.view_synthesis import _rim_samples_beside_gaps
+
+    z = np.full((5, 8), 4.0, np.float32)
+    z[:, 4:] = 1.0  # column 3 is the background rim
+    rim = mixed_pixels(z, side="far")
+    color = np.full((5, 8, 3), 30, np.uint8)
+    color[:, 3], color[:, 4:] = 120, 200
+    h, w = 5, 7
+    rows = np.repeat(np.arange(h, dtype=np.float32)[:, None], w, 1)
+
+    def layer(cols, src_u):
+        u = np.full((h, w), -1e6, np.float32)
+        d = np.full((h, w), np.nan, np.float32)
+        u[:, cols], d[:, cols] = src_u, 4.0
+        return SourceMaps(u, np.where(np.isnan(d), np.float32(-1e6), rows), d, ~np.isnan(d))
+
+    # a covers columns 3-6 (its gap: 0-2), b covers 0-3 (its gap: 4-6); column 3 from both rims
+    a, b = layer([3, 4, 5, 6], [3.0, 0.0, 1.0, 2.0]), layer([0, 1, 2, 3], [0.0, 1.0, 2.0, 3.0])
+    b.map_u[:2, 3] = 1.0  # rows 0-1: b's sample there is clean
+    expected = np.zeros((h, w), bool)
+    expected[2:, 3] = True
+    packed = pack_trust(source_trust(z), rim)
+    weights = np.array([0.5, 0.5])
+    exact = sample_composite([color, color], [a, b], weights, dtype=np.uint8, trust=[packed, packed])
+    fast = remap_composite([rgbt_source(color, packed[..., 0])] * 2, [a, b], weights, rims=[rim, rim])
+    for comp in (exact, fast):
+        assert comp.coverage.all()
+        np.testing.assert_array_equal(comp.replace, expected)
+        assert (np.abs(comp.color[:2, 3].astype(int) - 30) <= 2).all()  # the clean sample wins the blend
+    np.testing.assert_array_equal(_rim_samples_beside_gaps([a, b], [rim, rim]), expected)
+
+
 def test_a_clean_sample_beside_its_layer_s_gap_keeps_the_background_rim_s_colour_out():
     """A one-layer sample between a clean background pixel (nearest) and the background rim,
     within 2 px of its layer's gap, is the clean colour: the rim's foreground colour there is a

@@ -258,6 +258,15 @@ def _rim_free_resample(orow, u, src, rims, z, v, x, y, scale):
         orow[u, ch] = np.uint8(min(c + np.float32(0.5), np.float32(255.0)))
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _rims_beside_both_gaps(on_rim_a, on_rim_b, za, zb, v, u):
+    """Whether two agreeing samples are both on their sources' background rims (``on_rim_a``,
+    ``on_rim_b``), each beside its own layer's gap: neither source shows the surface's own colour
+    there (a dot between two disocclusions, clutter t = 0.75 at (74-75, 230)), so the fill
+    recolours it as it does a lone rim sample beside its gap."""
+    return on_rim_a and on_rim_b and _beside_gap(za, v, u) and _beside_gap(zb, v, u)
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, blend, rel_tol, quant0, quant2, is_int,
                       maxval, out, depth, coverage, use_trust, ka, kb, rim):
@@ -288,6 +297,8 @@ def sample_composite2(v0, v1, sa, ua, va, za, sb, ub, vb, zb, single, wa, wb, bl
                     if use_trust and (ka[p2, p0, 1] < 1.0 or kb[q2, q0, 1] < 1.0):  # a mixed tap near
                         xa, xb = _trust_weights(wa, wb, _lerp1(ka, p0, p1, p2, p3, pax, pay),
                                                 _lerp1(kb, q0, q1, q2, q3, qax, qay))
+                        rim[v, u] = _rims_beside_both_gaps(_on_rim(ka, ua[v, u], va[v, u]), _on_rim(kb, ub[v, u], vb[v, u]),
+                                                           za, zb, v, u)
                     for ch in range(nc):
                         x = xa * _lerp(sa, p0, p1, p2, p3, pax, pay, ch) + xb * _lerp(sb, q0, q1, q2, q3, qax, qay, ch)
                         _store(out, v, u, ch, x, is_int, maxval)
@@ -356,6 +367,9 @@ def composite_rgbt(v0, v1, la, za, lb, zb, single, wa, wb, blend, rel_tol, quant
                 orow[u, 2] = o2
                 drow[u] = xa * a + xb * b
                 crow[u] = True
+                if use_trust and ta < 255 and tb < 255:
+                    rrow[u] = _rims_beside_both_gaps(_nearest(ra, ua[v, u], va[v, u]), _nearest(rb, ub[v, u], vb[v, u]),
+                                                     za, zb, v, u)
             elif has_a or has_b:
                 # one layer, or two surfaces: layer a when it is the only one, the nearer one, or
                 # (front order, not ``blend``) the first; no arrays are rebound per pixel (numba

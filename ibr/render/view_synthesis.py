@@ -26,7 +26,7 @@ from ..base.validate import check_choice, check_finite_scalar, check_flag, check
 from ..base.camera import Camera, interpolate_cameras
 from ..base.depth import depth_steps, quantization_of, set_quantization
 from .composite import (COMPOSITE_MODES, Composite, _pixels_of, composite, mixed_pixels, pack_trust, remap_composite,
-                        rgbt_source, rim_beside_holes, sample_composite, source_trust, trust_channel,
+                        rgbt_source, sample_composite, source_trust, trust_channel,
                         viewpoint_weights)
 from .fill import FILLS, _fill_background_inplace, _fill_previous_inplace, _fill_pullpush_inplace, parallax_axis
 from .matting import _full_scale, rematte_rims, rematte_subsamples, rim_matte
@@ -117,6 +117,9 @@ EDGE_CONTRAST = 32 / 255
 #: A pixel's eight neighbours (the centre left out): dilating with it gives, per pixel, whether
 #: any neighbour is set.
 _RING = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], np.uint8)
+#: A pixel and its four neighbours: eroding a coverage with it keeps the pixels all of whose
+#: 4-neighbours are covered.
+_CROSS = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], np.uint8)
 
 
 # ------------------------------------------------------------------------- source cache
@@ -614,7 +617,7 @@ def _composite_maps(views, maps, weights, *, method, mesh_options, interpolation
                      quantization=quant)
     if packed is None:
         return comp
-    replace = _rim_samples_beside_gaps(maps, [t[..., 1] < 0 for t in packed])
+    replace = _rim_samples_beside_gaps(maps, [t[..., 1] < 0 for t in packed], depth_tol)
     return Composite(comp.color, comp.depth, comp.coverage, replace if replace.any() else None)
 
 
@@ -645,20 +648,28 @@ def _stray_samples(maps, views, coverage) -> np.ndarray | None:
     return stray if stray.any() else None
 
 
-def _rim_samples_beside_gaps(maps, rims) -> np.ndarray:
+def _rim_samples_beside_gaps(maps, rims, depth_tol: float = 0.02) -> np.ndarray:
     """(H, W) bool: target pixels that one layer alone covers with a sample whose nearest source
     pixel lies on that source's background rim (``rims``: per source, ``mixed_pixels(side="far")``),
-    beside a pixel that layer does not cover: what the bilinear 8-bit path's kernel marks as
-    :attr:`Composite.replace` (``_nearest`` and ``_beside_gap`` in ``_composite_kernels``), here
-    in numpy for the float-layer (bicubic) path."""
-    replace = np.zeros(maps[0].coverage.shape, bool)
-    for i, (m, r) in enumerate(zip(maps, rims)):
-        alone = m.coverage & ~maps[1 - i].coverage
-        ys, xs = _pixels_of(alone)
-        rim = np.zeros(replace.shape, bool)
+    beside a pixel that layer does not cover, and pixels where both layers see one surface (depths
+    within ``depth_tol``) through such samples, each beside its own layer's gap: what the
+    bilinear kernels mark as :attr:`Composite.replace` (``_nearest``, ``_beside_gap`` and
+    ``_rims_beside_both_gaps`` in ``_composite_kernels``), here in numpy for the float-layer
+    (bicubic) path."""
+    import cv2
+
+    shape = maps[0].coverage.shape
+    beside = []
+    for m, r in zip(maps, rims):
+        cov = np.ascontiguousarray(m.coverage).view(np.uint8)
+        ys, xs = _pixels_of(cov > cv2.erode(cov, _CROSS))  # covered, a 4-neighbour not (the image's border is no gap)
+        rim = np.zeros(shape, bool)
         rim[ys, xs] = r[m.nearest_source_pixel(ys, xs, r.shape)]
-        replace |= rim_beside_holes(m.coverage, rim)
-    return replace
+        beside.append(rim)
+    a, b = maps
+    with np.errstate(invalid="ignore"):
+        same = np.abs(a.depth - b.depth) <= depth_tol * np.fmin(a.depth, b.depth)
+    return (beside[0] & ~b.coverage) | (beside[1] & ~a.coverage) | (beside[0] & beside[1] & same)
 
 
 def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
