@@ -207,6 +207,14 @@ def _trust_weighted(ax, ay, t00, t01, t10, t11):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _tap_mean(src, x0, x1, y0, y1, w, ch):
+    """Channel ``ch`` of src over taps (y0, x0), (y0, x1), (y1, x0), (y1, x1), weighted by the
+    four weights ``w`` (their sum need not be 1; it must not be 0)."""
+    return ((w[0] * np.float32(src[y0, x0, ch]) + w[1] * np.float32(src[y0, x1, ch]) + w[2] * np.float32(src[y1, x0, ch])
+             + w[3] * np.float32(src[y1, x1, ch])) / (w[0] + w[1] + w[2] + w[3]))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _rim_free_store(src, k, z, x, y, out, v, u, is_int, maxval):
     """Store the sample of src at (x, y) with its taps weighted by their trust (channel 0 of the
     packed trust map ``k``) and return True, where it is a clean source pixel's sample (the
@@ -223,12 +231,9 @@ def _rim_free_store(src, k, z, x, y, out, v, u, is_int, maxval):
         return False
     if not _near_gap(z, v, u, RIM_FREE_GAP_PX):
         return False
-    w00, w01, w10, w11 = _trust_weighted(ax, ay, k[y0, x0, 0], k[y0, x1, 0], k[y1, x0, 0], k[y1, x1, 0])
-    s = w00 + w01 + w10 + w11
+    w = _trust_weighted(ax, ay, k[y0, x0, 0], k[y0, x1, 0], k[y1, x0, 0], k[y1, x1, 0])
     for ch in range(out.shape[2]):
-        c = (w00 * np.float32(src[y0, x0, ch]) + w01 * np.float32(src[y0, x1, ch]) + w10 * np.float32(src[y1, x0, ch])
-             + w11 * np.float32(src[y1, x1, ch])) / s
-        _store(out, v, u, ch, c, is_int, maxval)
+        _store(out, v, u, ch, _tap_mean(src, x0, x1, y0, y1, w, ch), is_int, maxval)
     return True
 
 
@@ -249,13 +254,10 @@ def _rim_free_resample(orow, u, src, rims, z, v, x, y, scale):
     if not (rims[j0, i0] or rims[j0, i1] or rims[j1, i0] or rims[j1, i1]) or not _near_gap(z, v, u, RIM_FREE_GAP_PX):
         return
     x0, x1, y0, y1 = i0 * scale, i1 * scale, j0 * scale, j1 * scale
-    w00, w01, w10, w11 = _trust_weighted(ax, ay, np.float32(src[y0, x0, 3]), np.float32(src[y0, x1, 3]),
-                                         np.float32(src[y1, x0, 3]), np.float32(src[y1, x1, 3]))
-    s = w00 + w01 + w10 + w11
+    w = _trust_weighted(ax, ay, np.float32(src[y0, x0, 3]), np.float32(src[y0, x1, 3]), np.float32(src[y1, x0, 3]),
+                        np.float32(src[y1, x1, 3]))
     for ch in range(3):
-        c = (w00 * np.float32(src[y0, x0, ch]) + w01 * np.float32(src[y0, x1, ch]) + w10 * np.float32(src[y1, x0, ch])
-             + w11 * np.float32(src[y1, x1, ch])) / s
-        orow[u, ch] = np.uint8(min(c + np.float32(0.5), np.float32(255.0)))
+        orow[u, ch] = np.uint8(min(_tap_mean(src, x0, x1, y0, y1, w, ch) + np.float32(0.5), np.float32(255.0)))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
