@@ -474,33 +474,42 @@ def test_background_rim_beside_a_disocclusion_is_marked_for_the_fill():
     assert replace[:2, 3].all() and replace.sum() == 2
 
 
+def _rim_source():
+    """A source 5 x 8 with a background (depth 4, colour 30) on the left and a foreground (depth 1,
+    colour 200) on the right: column 3 is its background rim, whose colour (120) mixes in the
+    foreground's. Returns its depth, rim (``mixed_pixels(side="far")``) and colour."""
+    z = np.full((5, 8), 4.0, np.float32)
+    z[:, 4:] = 1.0
+    color = np.full((5, 8, 3), 30, np.uint8)
+    color[:, 3] = 120
+    color[:, 4:] = 200
+    return z, mixed_pixels(z, side="far"), color
+
+
+def _background_layer(h: int, w: int, cols, src_u):
+    """SourceMaps of an h x w target whose columns ``cols`` sample the source's row v at column
+    ``src_u`` (depth 4, the background); the other columns are not covered."""
+    from ibr.render.rasterize import SourceMaps
+
+    rows = np.repeat(np.arange(h, dtype=np.float32)[:, None], w, 1)
+    u = np.full((h, w), -1e6, np.float32)
+    d = np.full((h, w), np.nan, np.float32)
+    u[:, cols], d[:, cols] = src_u, 4.0
+    return SourceMaps(u, np.where(np.isnan(d), np.float32(-1e6), rows), d, ~np.isnan(d))
+
+
 def test_background_rim_beside_the_other_sources_pixels_is_marked_for_the_fill():
     """A rim sample of source a whose neighbour only source b covers (a's surface ends there: the
     foreground beside it in a has moved away; no hole is left between the two) is marked too, by
     the 8-bit, the float and the bicubic paths alike; a rim sample inside a's own layer is not
     (the pole-rim lines on the clutter pair's face, issue 11)."""
     from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite, source_trust
-    from ibr.render.rasterize import SourceMaps
     from ibr.render.view_synthesis import _rim_samples_beside_gaps
 
-    z = np.full((5, 8), 4.0, np.float32)
-    z[:, 4:] = 1.0  # foreground on the right: column 3 is each source's background rim
-    rim = mixed_pixels(z, side="far")
-    color = np.full((5, 8, 3), 30, np.uint8)
-    color[:, 3] = 120  # the rim mixes in the foreground's colour
-    color[:, 4:] = 200
+    z, rim, color = _rim_source()
     h, w = 5, 6
-    rows = np.repeat(np.arange(h, dtype=np.float32)[:, None], w, 1)
-
-    def layer(cols, src_u):
-        u = np.full((h, w), -1e6, np.float32)
-        d = np.full((h, w), np.nan, np.float32)
-        u[:, cols], d[:, cols] = src_u, 4.0
-        v = np.where(np.isnan(d), np.float32(-1e6), rows)
-        return SourceMaps(u, v, d, ~np.isnan(d))
-
     # target columns 0-2 from b's clean background, 3-5 from a: column 3 and 4 on a's rim pixel
-    maps = [layer([3, 4, 5], [3.0, 3.0, 1.0]), layer([0, 1, 2], [0.0, 1.0, 2.0])]
+    maps = [_background_layer(h, w, [3, 4, 5], [3.0, 3.0, 1.0]), _background_layer(h, w, [0, 1, 2], [0.0, 1.0, 2.0])]
     expected = np.zeros((h, w), bool)
     expected[:, 3] = True  # beside column 2, which only b covers; column 4 has a on both sides
     packed = pack_trust(source_trust(z), rim)
@@ -519,25 +528,13 @@ def test_two_rim_samples_each_beside_its_own_layer_s_gap_are_marked_for_the_fill
     beside clutter's left pole at t = 0.75): the fill recolours it, in the 8-bit, the float and
     the bicubic paths alike. Where one of the two samples is clean, the blend keeps it."""
     from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite
-    from ibr.render.rasterize import SourceMaps
     from ibr.render.view_synthesis import _rim_samples_beside_gaps
 
-    z = np.full((5, 8), 4.0, np.float32)
-    z[:, 4:] = 1.0  # column 3 is the background rim
-    rim = mixed_pixels(z, side="far")
-    color = np.full((5, 8, 3), 30, np.uint8)
-    color[:, 3], color[:, 4:] = 120, 200
+    z, rim, color = _rim_source()
     h, w = 5, 7
-    rows = np.repeat(np.arange(h, dtype=np.float32)[:, None], w, 1)
-
-    def layer(cols, src_u):
-        u = np.full((h, w), -1e6, np.float32)
-        d = np.full((h, w), np.nan, np.float32)
-        u[:, cols], d[:, cols] = src_u, 4.0
-        return SourceMaps(u, np.where(np.isnan(d), np.float32(-1e6), rows), d, ~np.isnan(d))
-
     # a covers columns 3-6 (its gap: 0-2), b covers 0-3 (its gap: 4-6); column 3 from both rims
-    a, b = layer([3, 4, 5, 6], [3.0, 0.0, 1.0, 2.0]), layer([0, 1, 2, 3], [0.0, 1.0, 2.0, 3.0])
+    a = _background_layer(h, w, [3, 4, 5, 6], [3.0, 0.0, 1.0, 2.0])
+    b = _background_layer(h, w, [0, 1, 2, 3], [0.0, 1.0, 2.0, 3.0])
     b.map_u[:2, 3] = 1.0  # rows 0-1: b's sample there is clean
     expected = np.zeros((h, w), bool)
     expected[2:, 3] = True
@@ -560,27 +557,14 @@ def test_a_clean_sample_beside_its_layer_s_gap_keeps_the_background_rim_s_colour
     plain bilinear sample. The 8-bit path (with and without the 2 x 2 upsampled sources of sharp
     sampling) and the float path alike."""
     from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite, trust_channel
-    from ibr.render.rasterize import SourceMaps
     from ibr.render.sharp_sampling import upsample_rgbt
 
-    z = np.full((5, 8), 4.0, np.float32)
-    z[:, 4:] = 1.0  # foreground on the right: column 3 is the background rim
-    rim = mixed_pixels(z, side="far")
+    z, rim, color = _rim_source()
     trust = source_trust(z)
-    color = np.full((5, 8, 3), 30, np.uint8)
-    color[:, 3] = 120  # the rim mixes in the foreground's colour
-    color[:, 4:] = 200
     h, w = 5, 8
-    rows = np.repeat(np.arange(h, dtype=np.float32)[:, None], w, 1)
-
-    def layer(cols, src_u):
-        u = np.full((h, w), -1e6, np.float32)
-        d = np.full((h, w), np.nan, np.float32)
-        u[:, cols], d[:, cols] = src_u, 4.0
-        return SourceMaps(u, np.where(np.isnan(d), np.float32(-1e6), rows), d, ~np.isnan(d))
-
     # a covers target columns 0-4, column 5 is a hole, b covers 6-7 with clean background
-    maps = [layer([0, 1, 2, 3, 4], [2.4, 2.6, 1.0, 2.4, 2.4]), layer([6, 7], [0.0, 1.0])]
+    maps = [_background_layer(h, w, [0, 1, 2, 3, 4], [2.4, 2.6, 1.0, 2.4, 2.4]),
+            _background_layer(h, w, [6, 7], [0.0, 1.0])]
     weights = np.array([0.5, 0.5])
     packed = pack_trust(trust, rim)
     up = upsample_rgbt(color, trust_channel(trust, z.shape))
