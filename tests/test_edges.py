@@ -555,9 +555,10 @@ def test_a_clean_sample_beside_its_layer_s_gap_keeps_the_background_rim_s_colour
     fainter second line beside the rim sample the fill recolours (the dotted line beside clutter's
     left pole at t = 0.75, issue 11). Farther from the gap, or nearest to the rim, it is the
     plain bilinear sample. The 8-bit path (with and without the 2 x 2 upsampled sources of sharp
-    sampling) and the float path alike."""
+    sampling), the float path and the float-layer paths' mending alike."""
     from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite, trust_channel
     from ibr.render.sharp_sampling import upsample_rgbt
+    from ibr.render.view_synthesis import _keep_rims_out
 
     z, rim, color = _rim_source()
     trust = source_trust(z)
@@ -573,6 +574,11 @@ def test_a_clean_sample_beside_its_layer_s_gap_keeps_the_background_rim_s_colour
            "8-bit": [remap_composite([rgbt_source(color, trust)] * 2, maps, weights, rims=r)
                      for r in ([rim, rim], None)],
            "8-bit 2x2": [remap_composite([up, up], maps, weights, rims=r, source_scale=2) for r in ([rim, rim], None)]}
+    # the float-layer paths (bicubic; sharp sampling of colour that is not 8-bit RGB) mend their composite after it
+    plain = sample_composite([color, color], maps, weights, dtype=np.uint8)
+    mended = sample_composite([color, color], maps, weights, dtype=np.uint8)
+    _keep_rims_out(mended.color, maps, [color, color], [packed, packed])
+    got["float layers"] = [mended, plain]
     for name, (comp, plain) in got.items():  # plain: without the silhouettes' trust and rims
         c, p = comp.color[..., 0].astype(int), plain.color[..., 0].astype(int)
         assert (p[:, 3:5] > 45).all() and (np.abs(c[:, 3:5] - 30) <= 2).all(), name  # rim trust 0.03
