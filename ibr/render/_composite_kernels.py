@@ -237,6 +237,16 @@ def _rim_free_store(src, k, z, x, y, out, v, u, is_int, maxval):
     return True
 
 
+@njit(cache=True, error_model="numpy", nogil=True)
+def rim_free_samples(ys, xs, src, k, z, map_u, map_v, out, is_int, maxval):
+    """:func:`_rim_free_store` at the target pixels ``(ys, xs)`` that one layer alone covers
+    (its depths ``z``, its maps ``map_u``, ``map_v`` into ``src`` with the packed trust ``k``):
+    the float-layer paths' composite ``out`` (H, W, C) mended in place where it applies."""
+    for i in range(ys.size):
+        v, u = ys[i], xs[i]
+        _rim_free_store(src, k, z, map_u[v, u], map_v[v, u], out, v, u, is_int, maxval)
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _rim_free_resample(orow, u, src, rims, z, v, x, y, scale):
     """:func:`_rim_free_store` for the 8-bit path: ``src`` an (H_s, W_s, 4) colour + trust source

@@ -623,45 +623,20 @@ def _composite_maps(views, maps, weights, *, method, mesh_options, interpolation
 
 
 def _keep_rims_out(color, maps, sources, packed) -> None:
-    """In place in the composite ``color`` (H, W, C): where one layer alone covers a pixel
-    within :data:`~ibr.render._composite_kernels.RIM_FREE_GAP_PX` of its gap and its sample's
-    nearest source pixel is clean while a bilinear tap lies on the source's background rim, the
-    sample again, bilinear on the source's own pixels (``sources``: (H_s, W_s, C)) with the taps
-    weighted by their trust (``packed``: per source, ``pack_trust``): what the bilinear kernels do
-    (``_rim_free_store``, ``_rim_free_resample``), here for the float-layer paths (bicubic, and
-    sharp sampling of colour that is not 8-bit RGB)."""
-    import cv2
+    """In place in the composite ``color`` (H, W, C) of the float-layer paths (bicubic, and sharp
+    sampling of colour that is not 8-bit RGB): the pixels that one layer alone covers take the
+    rule of the bilinear kernels (``_rim_free_store`` in ``_composite_kernels``): near that layer's
+    gap, a sample whose nearest source pixel is clean while a tap lies on the background rim is
+    taken again, bilinear on the source's own pixels (``sources``: (H_s, W_s, C)) with the taps
+    weighted by their trust (``packed``: per source, ``pack_trust``)."""
+    from . import _composite_kernels as _ck
 
-    from ._composite_kernels import RIM_FREE_GAP_PX
-
-    r = RIM_FREE_GAP_PX
-    arms = np.zeros((2 * r + 1, 2 * r + 1), np.uint8)
-    arms[r, :] = arms[:, r] = 1  # the pixels up to r away along a row or column
+    out = color.reshape(*color.shape[:2], -1)
+    is_int = out.dtype.kind in "ui"
+    maxval = float(np.iinfo(out.dtype).max) if is_int else 0.0
     for i, (m, src, k) in enumerate(zip(maps, sources, packed)):
-        cov = np.ascontiguousarray(m.coverage).view(np.uint8)
-        near_gap = (cov > cv2.erode(cov, arms)) & ~maps[1 - i].coverage
-        ys, xs = _pixels_of(near_gap)
-        if not ys.size:
-            continue
-        h, w = k.shape[:2]
-        u, v = m.map_u[ys, xs].astype(np.float64), m.map_v[ys, xs].astype(np.float64)
-        fx, fy = np.floor(u), np.floor(v)
-        ax, ay = u - fx, v - fy
-        x0, x1 = np.clip(fx, 0, w - 1).astype(np.intp), np.clip(fx + 1, 0, w - 1).astype(np.intp)
-        y0, y1 = np.clip(fy, 0, h - 1).astype(np.intp), np.clip(fy + 1, 0, h - 1).astype(np.intp)
-        taps = ((y0, x0, (1 - ax) * (1 - ay)), (y0, x1, ax * (1 - ay)), (y1, x0, (1 - ax) * ay), (y1, x1, ax * ay))
-        clean = k[np.where(ay >= 0.5, y1, y0), np.where(ax >= 0.5, x1, x0), 0] >= 1.0
-        on_rim = np.any([k[ty, tx, 1] < 0 for ty, tx, _ in taps], axis=0)
-        sel = clean & on_rim
-        if not sel.any():
-            continue
-        wts = [wt[sel] * k[ty[sel], tx[sel], 0] for ty, tx, wt in taps]
-        total = np.add.reduce(wts)
-        mix = sum(wt[:, None] * src[ty[sel], tx[sel]].astype(np.float64) for wt, (ty, tx, _) in zip(wts, taps))
-        mix /= total[:, None]
-        if np.issubdtype(color.dtype, np.integer):
-            mix = np.clip(np.rint(mix), 0, np.iinfo(color.dtype).max)
-        color.reshape(*color.shape[:2], -1)[ys[sel], xs[sel]] = mix.astype(color.dtype)
+        ys, xs = _pixels_of(m.coverage & ~maps[1 - i].coverage)
+        _ck.rim_free_samples(ys, xs, src, k, m.depth, m.map_u, m.map_v, out, is_int, maxval)
 
 
 def _stray_samples(maps, views, coverage) -> np.ndarray | None:
