@@ -448,14 +448,13 @@ def pp_write0(color, depth, holes, coarse_val, mix, direct, direct_ok, direct_z,
             if not (z > 0.0):
                 continue
             on_ramp = direct_ok[v, u] and ramp[v, u]
-            d = on_ramp or (direct_ok[v, u] and direct_z[v, u] >= gate * z)
-            m = ramp_mix if on_ramp else mix
+            d = direct_ok[v, u] and direct_z[v, u] >= gate * z
             for k in range(nc):
                 x = _up(coarse_val, cv, cu, ov, ou, k)
                 if on_ramp:
-                    x = (1.0 - m) * x + m * np.float32(ramp_lines[v, u, k])
+                    x = (1.0 - ramp_mix) * x + ramp_mix * np.float32(ramp_lines[v, u, k])
                 elif d:
-                    x = (1.0 - m) * x + m * np.float32(direct[v, u, k])
+                    x = (1.0 - mix) * x + mix * np.float32(direct[v, u, k])
                 if is_int:
                     x = np.floor(x + 0.5)
                 color[v, u, k] = x
