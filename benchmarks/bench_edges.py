@@ -335,7 +335,7 @@ def quantized_supersampled(name, exact, codes, quantization, truths, mm):
     """``supersample=3`` from 8-bit disparity codes against the exact depth's (the coarse source
     upsampled from its fitted mesh's depth moved into its codes' bins, and from its codes as
     before the seventeenth session), and from the 16-bit millimetres ``mm``."""
-    from ibr.render import view_synthesis
+    from ibr.render import sources
 
     cams = [g.camera for g in truths]
 
@@ -345,7 +345,7 @@ def quantized_supersampled(name, exact, codes, quantization, truths, mm):
 
     p0, p = score(exact), score(codes, mesh_options={"quantization": quantization})
     fresh = [View(v.color, v.depth, v.camera, v.name) for v in codes]  # new views: nothing cached on them
-    with mock.patch.object(view_synthesis, "_with_mesh_depth", lambda view, mesh, *partner: view):
+    with mock.patch.object(sources, "_with_mesh_depth", lambda view, mesh, *partner: view):
         before = score(fresh, mesh_options={"quantization": quantization})
     p_mm = score(mm, mesh_options={"quantization": DepthQuantization.codes(0.001)})
     near, far = 0.003, 1e6  # a coarse 16-bit z-buffer: a code is about 4.6 cm at 3 m

@@ -46,7 +46,7 @@ _EXPORTS = {
     "warp": "render.view_synthesis",
     "interpolate": "render.view_synthesis",
     "iter_interpolate": "render.view_synthesis",
-    "Rendering": "render.view_synthesis",
+    "Rendering": "render.rendering",
     # Modules that were top-level before the stage layout (#9): ``ibr.base.depth``, ``ibr.stereo.lens`` ...
     # keep working as attributes.
     "camera": "base.camera.",

@@ -155,7 +155,8 @@ def test_remap_composite_matches_the_exact_sampler_within_a_level():
     from ibr.io import load_view
     from ibr.render.composite import remap_composite, rgbt_source, sample_composite
     from ibr.render.rasterize import SourceMaps
-    from ibr.render.view_synthesis import _mesh_key, _source, _source_maps
+    from ibr.render.frame_composite import _source_maps
+    from ibr.render.sources import _mesh_key, _source
     from samples import DATA_DIR
 
     a, b = load_view(DATA_DIR / "clutter_a.json"), load_view(DATA_DIR / "clutter_b.json")
@@ -235,7 +236,7 @@ def test_view_synthesis_never_reads_the_maps_of_uncovered_pixels(monkeypatch, op
     the float-colour paths; the motorcycle warp has 16 % uncovered pixels)."""
     from ibr.base.view import View
     from ibr.io.middlebury import motorcycle_views
-    from ibr.render import view_synthesis as vs
+    from ibr.render import frame_composite, view_synthesis as vs
     from ibr.render.rasterize import _FAR
 
     left, right = motorcycle_views()
@@ -243,7 +244,7 @@ def test_view_synthesis_never_reads_the_maps_of_uncovered_pixels(monkeypatch, op
     if opts.pop("float_color", False):
         left = View(left.color.astype(np.float32) / 255, left.depth, left.camera)
     inside = vs.warp(left, right.camera, fill="none", **opts)
-    monkeypatch.setattr(vs, "_UNCOVERED_COORD", _FAR)
+    monkeypatch.setattr(frame_composite, "_UNCOVERED_COORD", _FAR)
     far = vs.warp(left, right.camera, fill="none", **opts)
     assert 0.1 < inside.holes.mean() < 0.25  # many uncovered pixels
     np.testing.assert_array_equal(inside.holes, far.holes)

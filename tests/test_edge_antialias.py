@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import ibr.render.frame_composite as frame
 import ibr.render.view_synthesis as vs
 from ibr.base.camera import Camera
 from ibr.base.view import View
@@ -285,7 +286,7 @@ def test_rim_subsamples_are_re_mixed_over_the_new_background(clutter, monkeypatc
     cams = [g.camera for g in truths]
     new = vs.interpolate(a, b, cams, fill="none", antialias=True)
     with monkeypatch.context() as m:
-        m.setattr(vs, "rematte_subsamples", lambda *args, **kw: 0)
+        m.setattr(frame, "rematte_subsamples", lambda *args, **kw: 0)
         old = vs.interpolate(a, b, cams, fill="none", antialias=True)
     col = (slice(80, 106), slice(327, 332))
     g = truths[1].color.astype(np.float64)
@@ -312,7 +313,7 @@ def test_rim_subsample_re_mix_matches_a_plain_python_reference(clutter, monkeypa
         got.update(after=sub_color.copy(), n=n)
         return n
 
-    monkeypatch.setattr(vs, "rematte_subsamples", capture)
+    monkeypatch.setattr(frame, "rematte_subsamples", capture)
     vs.interpolate(a, b, truths[1].camera, fill="none", antialias=True)
     sub_depth, layers, ys, xs, color, depth, mattes, shapes = got["args"]
     ref = got["before"].astype(np.float64)

@@ -504,7 +504,7 @@ def test_background_rim_beside_the_other_sources_pixels_is_marked_for_the_fill()
     the 8-bit, the float and the bicubic paths alike; a rim sample inside a's own layer is not
     (the pole-rim lines on the clutter pair's face, issue 11)."""
     from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite, source_trust
-    from ibr.render.view_synthesis import _rim_samples_beside_gaps
+    from ibr.render.frame_composite import _rim_samples_beside_gaps
 
     z, rim, color = _rim_source()
     h, w = 5, 6
@@ -528,7 +528,7 @@ def test_two_rim_samples_each_beside_its_own_layer_s_gap_are_marked_for_the_fill
     beside clutter's left pole at t = 0.75): the fill recolours it, in the 8-bit, the float and
     the bicubic paths alike. Where one of the two samples is clean, the blend keeps it."""
     from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite
-    from ibr.render.view_synthesis import _rim_samples_beside_gaps
+    from ibr.render.frame_composite import _rim_samples_beside_gaps
 
     z, rim, color = _rim_source()
     h, w = 5, 7
@@ -558,7 +558,7 @@ def test_a_clean_sample_beside_its_layer_s_gap_keeps_the_background_rim_s_colour
     sampling), the float path and the float-layer paths' mending alike."""
     from ibr.render.composite import pack_trust, remap_composite, rgbt_source, sample_composite, trust_channel
     from ibr.render.sharp_sampling import upsample_rgbt
-    from ibr.render.view_synthesis import _keep_rims_out
+    from ibr.render.frame_composite import _keep_rims_out
 
     z, rim, color = _rim_source()
     trust = source_trust(z)
@@ -721,7 +721,7 @@ def test_one_pixel_cracks_between_the_quads_of_a_curved_surface_are_closed():
     exact ground truth) with the covered pixels' colour accuracy; at t = 0.5 of the pair the
     background no longer shows through the dark sphere's rim (a jagged orange line)."""
     from ibr.render.rasterize import rasterize_mesh
-    from ibr.render.view_synthesis import _lod_options
+    from ibr.render.sources import _lod_options
 
     a, b = load_view(DATA_DIR / "clutter_a.json"), load_view(DATA_DIR / "clutter_b.json")
     truth = load_view(DATA_DIR / "clutter_t050.json")
@@ -804,7 +804,7 @@ def test_the_gap_behind_a_one_pixel_pole_is_no_crack(axis):
     agrees in depth, but halfway between the two wall samples the source shows the pole: crack
     closing drew the pole's colour there at the wall's depth (224 levels off). The source surface
     test leaves that gap a hole, for the fill: the wall's colour within its texture's 30 levels."""
-    import ibr.render.view_synthesis as vsyn
+    import ibr.render.frame_composite as frame
 
     h, w = 64, 96
     z = np.full((h, w), 5.0, np.float32)
@@ -819,7 +819,7 @@ def test_the_gap_behind_a_one_pixel_pole_is_no_crack(axis):
     pose[0 if axis == 1 else 1, 3] = 0.07
     target = Camera(80.0, 80.0, (w - 1) / 2, (h - 1) / 2, w, h, pose)
     r = warp(View(col, z, src, "pole"), target)
-    assert vsyn.CRACK_REL > 0
+    assert frame.CRACK_REL > 0
     wall = r.depth > 4
     err = np.abs(r.color.astype(int) - np.array([200, 0, 129])).max(-1)
     assert wall.sum() > 0.8 * h * w and err[wall].max() <= 30

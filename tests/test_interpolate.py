@@ -12,8 +12,9 @@ import pytest
 import cli
 import ibr
 from ibr.base.camera import Camera, look_at
-from ibr.render.view_synthesis import (Rendering, _lod_options, _source_maps, _stray_samples, interpolate,
-                                      source_mesh, warp)
+from ibr.render.frame_composite import _source_maps, _stray_samples
+from ibr.render.sources import _lod_options
+from ibr.render.view_synthesis import Rendering, interpolate, source_mesh, warp
 from ibr.io import load_view, read_image, save_view
 from ibr.base.view import View
 from samples import DATA_DIR

@@ -42,7 +42,7 @@ PUBLIC = {
     "ibr.QuadMesh": "ibr.mesh.quad_mesh",
     "ibr.warp": "ibr.render.view_synthesis",
     "ibr.interpolate": "ibr.render.view_synthesis",
-    "ibr.Rendering": "ibr.render.view_synthesis",
+    "ibr.Rendering": "ibr.render.rendering",
     "ibr.io.atomic_path": "ibr.io.images",
     "ibr.io.write_obj": "ibr.io.mesh_files",
     "ibr.render.render_mesh": "ibr.render.rasterize",

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import ibr.render.frame_composite as frame
 import ibr.render.view_synthesis as vs
 from ibr.base.camera import Camera
 from ibr.io import load_view
@@ -64,7 +65,7 @@ def test_sources_come_back_unchanged_at_their_own_pose(clutter):
 
 def _without_rematte(monkeypatch, fn):
     with monkeypatch.context() as m:
-        m.setattr(vs, "rematte_rims", lambda *args, **kw: 0)
+        m.setattr(frame, "rematte_rims", lambda *args, **kw: 0)
         return fn()
 
 
@@ -140,7 +141,7 @@ def test_the_kernel_matches_its_reference_on_a_real_frame(clutter, monkeypatch):
         got.update(after=color.copy(), n=n)
         return n
 
-    monkeypatch.setattr(vs, "rematte_rims", capture)
+    monkeypatch.setattr(frame, "rematte_rims", capture)
     vs.interpolate(a, b, g.camera, fill="none")
     ref, n_ref = _reference(got["before"], got["depth"], got["camera"], got["layers"], got["mattes"], got["shapes"])
     assert got["n"] >= n_ref > 20  # the kernel counts a pixel twice when two rim pixels reach it
@@ -211,9 +212,9 @@ def test_hard_cases_behind_the_camera_wide_fields_and_missing_depth(clutter):
 
 
 def _without_rematte_plain(views, cam):
-    real = vs.rematte_rims
-    vs.rematte_rims = lambda *args, **kw: 0
+    real = frame.rematte_rims
+    frame.rematte_rims = lambda *args, **kw: 0
     try:
         return vs.interpolate(*views, cam, fill="none")
     finally:
-        vs.rematte_rims = real
+        frame.rematte_rims = real

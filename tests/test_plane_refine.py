@@ -16,7 +16,8 @@ from ibr.mesh.quad_mesh import QuadMesh, fit_inv_depth_planes, mesh_depth
 from ibr.render import plane_refine
 from ibr.render.plane_refine import COARSE_PX, is_coarse, refine_planes
 import cli
-from ibr.render.view_synthesis import _holds_dead_ref, _source, coarse_sources, interpolate, interpolation_meshes
+from ibr.render.sources import _holds_dead_ref, _source
+from ibr.render.view_synthesis import coarse_sources, interpolate, interpolation_meshes
 from ibr.synth import make_scene, render, scene_cameras
 from samples import DATA_DIR
 

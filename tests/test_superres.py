@@ -126,7 +126,8 @@ def test_the_pair_is_refined_once_and_dropped_with_a_view(monkeypatch):
     import gc
 
     import ibr.render.superres as superres
-    from ibr.render.view_synthesis import _source, interpolate
+    from ibr.render.sources import _source
+    from ibr.render.view_synthesis import interpolate
 
     calls = []
     real = superres.super_resolve_pair

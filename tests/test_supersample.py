@@ -112,7 +112,7 @@ def test_every_colour_layout_and_the_forward_method_and_previous_fill(dtype, clu
 def test_the_upsampled_source_follows_a_quantization_set_later():
     """The cached upsampled source takes the view's depth quantization as it is at each call."""
     from ibr.base.depth import DepthQuantization, quantization_of, set_quantization
-    from ibr.render.view_synthesis import _source
+    from ibr.render.sources import _source
 
     v = _edge_view(6.3)
     warp(v, v.camera, supersample=3)

@@ -6,7 +6,8 @@ layers (:class:`Layer`: color, depth, coverage), composited and hole-filled into
 :mod:`~ibr.render.rasterize` (per-quad exact homography + z-buffer), :mod:`~ibr.render.forward`
 (per-pixel splat), :mod:`~ibr.render.composite` (two sources, depth-aware),
 :mod:`~ibr.render.fill` (previous frame, background side), :mod:`~ibr.render.view_synthesis`
-(the pipeline). Each module's numba kernels sit beside it. Imports :mod:`ibr.base` and
+(the pipeline: :mod:`~ibr.render.sources` caches what each source view gives,
+:mod:`~ibr.render.frame_composite` makes one frame from the sources' maps). Each module's numba kernels sit beside it. Imports :mod:`ibr.base` and
 :mod:`ibr.mesh`.
 """
 
@@ -26,7 +27,7 @@ _EXPORTS = {
     "fill_background_rows": "fill",
     "fill_horizontal_parallax": "fill",
     "fill_previous": "fill",
-    "Rendering": "view_synthesis",
+    "Rendering": "rendering",
     "interpolate": "view_synthesis",
     "iter_interpolate": "view_synthesis",
     "interpolation_meshes": "view_synthesis",

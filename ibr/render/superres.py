@@ -39,7 +39,7 @@ covered pixels; edge band / all covered, dB): clutter 31.54 / 39.59 -> 31.77 ban
 back-projection and the box over every pixel -> 32.17 / 40.47 with the partner's (eight
 iterations; 32.03 with only the partner's pixels this source sees whole); room 32.37 / 40.07 ->
 32.45 -> 33.07 / 41.49 (32.93); with the upsampled pair's widened trust
-(:meth:`~ibr.render.view_synthesis._Source.silhouettes`) and twelve iterations 32.27 /
+(:meth:`~ibr.render.sources._Source.silhouettes`) and twelve iterations 32.27 /
 40.63 and 33.21 / 41.79; the motorcycle pair's one source 28.29 -> 28.30 (28.28 with the
 twentieth session's start). Before the
 partial and unsplit pixels more iterations lost at the silhouettes (20: clutter band 31.93,

@@ -16,7 +16,7 @@ from ..base.jit import njit
 __all__: list[str] = []
 
 #: A depth step for sharp sampling's taps: inverse depths of row neighbours more than this apart,
-#: relative to the nearer one (the 2 % of :func:`ibr.render.view_synthesis._sharp_edges`).
+#: relative to the nearer one (the 2 % of :func:`ibr.render.sources._sharp_edges`).
 STEP_REL = 0.02
 
 
