@@ -9,6 +9,7 @@ import pytest
 import ibr.render.frame_composite as frame
 import ibr.render.view_synthesis as vs
 from ibr.base.camera import Camera
+from ibr.base.view import View
 from ibr.io import load_view
 from ibr.render.matting import MIN_CHANGE, RimMatte, rematte_rims, rim_matte
 from samples import DATA_DIR
@@ -152,7 +153,7 @@ def test_the_kernel_matches_its_reference_on_a_real_frame(clutter, monkeypatch):
 def test_other_colour_types_gain_as_well(clutter, monkeypatch, dtype):
     a, b, _, g, _ = clutter
     scale = 1 / 255 if dtype == np.float32 else 257
-    conv = [vs.View((v.color.astype(np.float64) * scale).astype(dtype), v.depth, v.camera, v.name) for v in (a, b)]
+    conv = [View((v.color.astype(np.float64) * scale).astype(dtype), v.depth, v.camera, v.name) for v in (a, b)]
     r_new = vs.interpolate(*conv, g.camera, fill="none")
     r_old = _without_rematte(monkeypatch, lambda: vs.interpolate(*conv, g.camera, fill="none"))
     new, old = (r.color.astype(np.float64) / scale for r in (r_new, r_old))
@@ -197,7 +198,7 @@ def test_hard_cases_behind_the_camera_wide_fields_and_missing_depth(clutter):
     for z in holes:
         z[100:140, 200:260] = np.nan  # a hole beside the dark sphere's rim
         z[0, :] = np.inf
-    views = [vs.View(v.color, z, v.camera, v.name) for v, z in zip((a, b), holes)]
+    views = [View(v.color, z, v.camera, v.name) for v, z in zip((a, b), holes)]
     turned = g.camera.with_pose(g.camera.world_from_cam @ np.diag([-1.0, 1.0, -1.0, 1.0]))  # looking back
     wide = Camera.from_fov(g.camera.width, g.camera.height, hfov_deg=150.0, world_from_cam=g.camera.world_from_cam)
     with warnings.catch_warnings():

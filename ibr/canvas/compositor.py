@@ -33,7 +33,7 @@ import numpy as np
 from ..base.camera import Camera
 from ..base.validate import check_image, check_positive
 from ..base.view import View
-from ..render.view_synthesis import Rendering
+from ..render.rendering import Rendering
 from . import _compositor_kernels as _k
 from .plane import Canvas
 

@@ -7,8 +7,8 @@ layers (:class:`Layer`: color, depth, coverage), composited and hole-filled into
 (per-pixel splat), :mod:`~ibr.render.composite` (two sources, depth-aware),
 :mod:`~ibr.render.fill` (previous frame, background side), :mod:`~ibr.render.view_synthesis`
 (the pipeline: :mod:`~ibr.render.sources` caches what each source view gives,
-:mod:`~ibr.render.frame_composite` makes one frame from the sources' maps). Each module's numba kernels sit beside it. Imports :mod:`ibr.base` and
-:mod:`ibr.mesh`.
+:mod:`~ibr.render.frame_composite` makes one frame from the sources' maps). Each module's numba
+kernels sit beside it. Imports :mod:`ibr.base` and :mod:`ibr.mesh`.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ _EXPORTS = {
     "iter_interpolate": "view_synthesis",
     "interpolation_meshes": "view_synthesis",
     "coarse_sources": "view_synthesis",
-    "source_mesh": "view_synthesis",
+    "source_mesh": "sources",
     "warp": "view_synthesis",
     "viewpoint_weights": "composite",
     "sample_composite": "composite",

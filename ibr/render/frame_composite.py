@@ -245,6 +245,11 @@ def _rim_samples_beside_gaps(maps, rims, depth_tol: float = 0.02) -> np.ndarray:
 
 
 def _finish(comp, camera, t, fill, previous, out_2d, axis=0) -> Rendering:
+    """The :class:`Rendering` of the composite ``comp`` in ``camera`` (``t``: its interpolation
+    parameter): holes filled as ``fill`` says (``previous``: the frame before, for "previous"),
+    the covered pixels :attr:`~ibr.render.composite.Composite.replace` marks recoloured by the
+    fill (their depth kept); ``out_2d``: single-channel colour as (H, W); ``axis``: the
+    parallax axis of the fill (:func:`~ibr.render.fill.parallax_axis`)."""
     holes = ~comp.coverage
     color, depth = comp.color, comp.depth
     filled = np.zeros_like(holes)

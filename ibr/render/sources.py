@@ -64,8 +64,8 @@ class _Source:
 
     def upsampled(self, k: int) -> View:
         """The source alone at k x k its resolution with sub-pixel silhouettes and back-projected
-        colour (:func:`~ibr.render.upsample.upsample_view`; :func:`~ibr.render.view_synthesis.warp`), made once per factor;
-        its meshes are cached on it like any view's."""
+        colour (:func:`~ibr.render.upsample.upsample_view`; :func:`~ibr.render.view_synthesis.warp`),
+        made once per factor; its meshes are cached on it like any view's."""
         v = self._upsampled.get(k)
         if v is None:
             v = self._upsampled[k] = _with_mixed_radius(self._upsample(k), k)
@@ -74,8 +74,9 @@ class _Source:
     def _upsample(self, k: int, refined_key=None, clean_start: bool = False, partner_key=None) -> View:
         """:func:`~ibr.render.upsample.upsample_view` of the source, or with ``refined_key`` (the
         options of a mesh of this source refined against its partner, :func:`_with_partners`) of
-        the source with that mesh's depth instead of its stored codes (:func:`~ibr.render.view_synthesis._upsampled_pair`;
-        ``partner_key``: the partner's, whose quantization its codes' bins take);
+        the source with that mesh's depth instead of its stored codes
+        (:func:`~ibr.render.view_synthesis._upsampled_pair`; ``partner_key``: the partner's, whose
+        quantization its codes' bins take);
         ``clean_start`` for a colour its partner refines."""
         from .upsample import upsample_view
 
@@ -254,10 +255,11 @@ def source_mesh(view: View, **mesh_options):
     return mesh
 
 
-#: The mesh option (internal: added by :func:`~ibr.render.view_synthesis.iter_interpolate` and :func:`~ibr.render.view_synthesis.interpolation_meshes`;
-#: not a keyword a caller would type) holding a weak reference to the other source of a pair:
-#: the source's depth is coarsely quantized, and its mesh's large quads are fitted to the other's
-#: colour (:mod:`ibr.render.plane_refine`).
+#: The mesh option (internal: added by :func:`~ibr.render.view_synthesis.iter_interpolate` and
+#: :func:`~ibr.render.view_synthesis.interpolation_meshes`; not a keyword a caller would type)
+#: holding a weak reference to the other source of a pair: the source's depth is coarsely
+#: quantized, and its mesh's large quads are fitted to the other's colour
+#: (:mod:`ibr.render.plane_refine`).
 _PARTNER = "partner view (internal)"
 
 

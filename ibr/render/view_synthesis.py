@@ -8,6 +8,12 @@ request) and the remaining holes are filled (previous frame in a sequence, depth
 fill for a single frame). ``method="forward"`` replaces the mesh by the per-pixel splat of seed 003
 (:func:`ibr.render.forward.forward_warp`) as a fast preview.
 
+This module holds the public calls; what each source view gives (its meshes, trust, upsampled
+view; the level of detail) is cached by :mod:`ibr.render.sources`, one frame is made from the
+sources' maps by :mod:`ibr.render.frame_composite`, and the result is a
+:class:`~ibr.render.rendering.Rendering` (re-exported here with :func:`lod_baseline` and
+:func:`source_mesh`). The helpers are imported by name: patch them where they are used.
+
 Conventions: pixel (u, v) = (column, row) with centers at integer coordinates (the image spans
 [-0.5, W-0.5] x [-0.5, H-0.5]); depth is planar z in scene units, float32, NaN where unknown;
 output colors keep the sources' dtype (uint8 in, uint8 out, rounded to nearest).
@@ -145,7 +151,7 @@ def warp(
     lod : {"move", "depth"}
         Where the error bound's baseline comes from when ``mesh_options`` fixes neither
         ``baseline`` nor ``threshold``: the actual move from the source to ``camera``
-        (default, :func:`lod_baseline`), or 5 % of the median depth (issue 4's default).
+        (default, :func:`~ibr.render.sources.lod_baseline`), or 5 % of the median depth (issue 4's default).
     supersample : {1, 3, 5}
         Upsample the source k x k with its silhouettes placed inside the mixed pixels and its
         colour back-projected (:mod:`ibr.render.upsample`), render k x k subsamples per pixel
@@ -232,7 +238,7 @@ def iter_interpolate(
     supersample: int = 1,
     antialias: bool = False,
 ) -> Iterator[Rendering]:
-    """Generator form of :func:`interpolate`: yields one :class:`Rendering` per target, in order
+    """Generator form of :func:`interpolate`: yields one :class:`~ibr.render.rendering.Rendering` per target, in order
     (the previous-frame fill uses the frame yielded before). Every argument is checked when it is
     called, before the first frame is asked for."""
     check_choice("method", method, METHODS)
@@ -281,17 +287,17 @@ def _check_pair(view_a, view_b, method: str = "mesh") -> None:
 def _pair_mesh_options(view_a, view_b, cams, mesh_options: dict, lod: str) -> list[dict]:
     """Each source's mesh options for rendering ``cams``: the level of detail from the span of
     the whole call (one mesh per source for every frame) and the other source where the depth's
-    codes are coarse (:func:`_with_partners`)."""
+    codes are coarse (:func:`~ibr.render.sources._with_partners`)."""
     opts = [_lod_options(v, cams, mesh_options, lod) for v in (view_a, view_b)]
     return _with_partners([view_a, view_b], opts)
 
 
 def _upsampled_pair(view_a, view_b, mesh_options: dict, lod: str, method: str, k: int) -> tuple:
     """The two sources at k x k their resolution, their colours refined by each other
-    (:meth:`_Source.upsampled_with`). A source in coarse codes (:func:`_with_partners`) is
-    upsampled from the depth of its mesh refined against the other source
-    (:mod:`ibr.render.plane_refine`), moved into its codes' bins and its partner's, rather than
-    from its codes (8-bit disparity, ``supersample=3``, against the exact depth's: clutter -1.94
+    (:meth:`~ibr.render.sources._Source.upsampled_with`). A source in coarse codes
+    (:func:`~ibr.render.sources._with_partners`) is upsampled from the depth of its mesh refined
+    against the other source (:mod:`ibr.render.plane_refine`), moved into its codes' bins and its
+    partner's, rather than from its codes (8-bit disparity, ``supersample=3``, against the exact depth's: clutter -1.94
     -> -0.72 dB, room -1.91 -> -0.14; docs/edges.md section 3); its upsampled meshes still allow
     for the codes' quantization."""
     keys = (None, None)

@@ -32,7 +32,8 @@ from ..base.validate import check_choice
 from ..base.view import View
 from ..render.fill import FILLS, _fill_previous_inplace, parallax_axis
 from ..render.supersample import check_supersample
-from ..render.view_synthesis import Rendering, check_antialias, iter_interpolate
+from ..render.rendering import Rendering
+from ..render.view_synthesis import check_antialias, iter_interpolate
 
 __all__ = ["SequenceFrame", "frame_count", "frame_schedule", "upconvert"]
 

@@ -19,7 +19,7 @@ from ibr.base.validate import check_mesh_options
 from ibr.base.ray_camera import SphericalCamera
 from ibr.base.view import View
 from ibr.render.blend import blend_sources
-from ibr.render.view_synthesis import source_mesh
+from ibr.render.sources import source_mesh
 
 from ..directions import FACE_NAMES
 from .rigs import cube_rig
