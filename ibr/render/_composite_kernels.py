@@ -123,7 +123,12 @@ def composite2(ca, za, cb, zb, wa, wb, blend, rel_tol, quant0, quant2, is_int, m
 def _taps(src, x, y):
     """Bilinear taps of src (H, W, C) at pixel coordinates (x, y) (centers at integers); taps
     outside the image are clamped to the border pixels."""
-    h, w = src.shape[0], src.shape[1]
+    return _taps_in(src.shape[0], src.shape[1], x, y)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _taps_in(h, w, x, y):
+    """:func:`_taps` of an h x w image: (x0, x1, y0, y1, ax, ay)."""
     fx0 = np.floor(x)
     fy0 = np.floor(y)
     ix = int(fx0)
@@ -252,13 +257,7 @@ def _rim_free_resample(orow, u, src, rims, z, v, x, y, scale):
     """:func:`_rim_free_store` for the 8-bit path: ``src`` an (H_s, W_s, 4) colour + trust source
     (upsampled ``scale`` x ``scale`` co-sited: its image pixel (i, j) is at (scale i, scale j)),
     ``rims`` its (H_s, W_s) background rim; taps on the image's own pixels; into ``orow[u]``."""
-    h, w = src.shape[0] // scale, src.shape[1] // scale
-    fx0 = np.floor(x)
-    fy0 = np.floor(y)
-    ax = np.float32(x - fx0)
-    ay = np.float32(y - fy0)
-    i0, i1 = min(max(int(fx0), 0), w - 1), min(max(int(fx0) + 1, 0), w - 1)
-    j0, j1 = min(max(int(fy0), 0), h - 1), min(max(int(fy0) + 1, 0), h - 1)
+    i0, i1, j0, j1, ax, ay = _taps_in(src.shape[0] // scale, src.shape[1] // scale, x, y)
     if src[(j1 if ay >= 0.5 else j0) * scale, (i1 if ax >= 0.5 else i0) * scale, 3] < 255:
         return
     if not (rims[j0, i0] or rims[j0, i1] or rims[j1, i0] or rims[j1, i1]) or not _near_gap(z, v, u, RIM_FREE_GAP_PX):
